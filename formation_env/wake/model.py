@@ -1,0 +1,200 @@
+"""ELL: the extended-lifting-line wake model of a formation (thesis chapter 4), batched.
+
+>>> from formation_env.geometry import test_wing
+>>> from formation_env.wake import WakeModel, FormationState
+>>> model = WakeModel([test_wing(), test_wing()])
+>>> state = FormationState.from_degrees([[0, 0, 0], [-1, -1, 0]], [[0, 0, 0]] * 2, 25.0, 5.0)
+>>> sol = model.evaluate(state)
+>>> sol.wind_ned.shape      # (B, V, 3) effective induced translational wind, m/s
+(1, 2, 3)
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..geometry import Vehicle
+from . import kernels
+from .lattice import EVAL_POINTS, ROTATIONAL_METHODS, build_template, gradient_weights
+from .state import FormationState
+
+__all__ = ["WakeModel", "WakeSolution", "CORES", "AIR_KINEMATIC_VISCOSITY_SL"]
+
+CORES = {"none": kernels.CORE_NONE, "lamb_oseen": kernels.CORE_LAMB_OSEEN, "kurylowich": kernels.CORE_KURYLOWICH}
+AIR_KINEMATIC_VISCOSITY_SL = 1.4607e-5  # m^2/s, ISA sea level
+# Above this many formations the batch is spread over threads; below it thread start-up costs more
+# than it saves.
+_PARALLEL_MIN_BATCH = 16
+
+
+@dataclass(frozen=True)
+class WakeSolution:
+    """ELL output for B formations of V vehicles with N panels in all.
+
+    circulation:       (B, N) horseshoe strengths Gamma, m^2/s (positive lifts; the thesis's G = -Gamma).
+    point_velocity_ned:(B, N, 3) induced velocity at each panel's evaluation point from the *other*
+                       vehicles, m/s (NED).
+    wind_ned, wind_body:   (B, V, 3) effective induced translational wind (mean over the vehicle's
+                       evaluation points), m/s, in NED and in the vehicle's body axes.
+    omega_body, omega_ned: (B, V, 3) effective induced rotational wind (Eq. 4.7), rad/s.
+    """
+
+    circulation: np.ndarray
+    point_velocity_ned: np.ndarray
+    wind_ned: np.ndarray
+    wind_body: np.ndarray
+    omega_body: np.ndarray
+    omega_ned: np.ndarray
+
+
+class WakeModel:
+    """The ELL model for a fixed formation make-up (a sequence of vehicles, any planforms).
+
+    Parameters
+    ----------
+    vehicles:
+        The vehicles of the formation, in order; every one sheds and feels wake (any can lead).
+    core:
+        Viscous core on the trailing legs for the field velocity: ``"kurylowich"`` (default,
+        rc = 36.2 sqrt(nu tau) / cos^2 sweep), ``"lamb_oseen"`` (rc = 2.24 sqrt(nu tau)) or ``"none"``.
+    eval_points:
+        Where the induced velocity is sampled on each receiving vehicle: ``"control"`` (3/4-chord
+        control points; reproduces Tables 5.3/5.4) or ``"quarter_chord"`` (1/4-chord panel
+        midpoints, the text of section 4.3.7; reproduces the chapter 5.4 figures).
+    rotational:
+        How the rotational wind is derived from the point velocities: ``"lstsq"`` (default; a
+        least-squares gradient over the directions the points span) or the thesis's finite
+        differences ``"eq4_82"``, ``"eq5_10"``, ``"eq6_1"`` (see ``lattice.gradient_weights``).
+    kinematic_viscosity:
+        nu of the air, m^2/s, for the vortex core growth (default ISA sea level).
+    span_tol:
+        Relative extent below which a direction counts as not spanned by the points (lstsq only).
+    """
+
+    def __init__(
+        self,
+        vehicles: Sequence[Vehicle],
+        *,
+        core: str = "kurylowich",
+        eval_points: str = "control",
+        rotational: str = "lstsq",
+        kinematic_viscosity: float = AIR_KINEMATIC_VISCOSITY_SL,
+        span_tol: float = 0.1,
+    ) -> None:
+        vehicles = tuple(vehicles)
+        if not vehicles:
+            raise ValueError("WakeModel: vehicles must contain at least one Vehicle")
+        for v in vehicles:
+            if not isinstance(v, Vehicle):
+                raise ValueError(f"WakeModel: vehicles must be Vehicle objects, got {v!r}")
+        if core not in CORES:
+            raise ValueError(f"WakeModel: core must be one of {tuple(CORES)}, got {core!r}")
+        if eval_points not in EVAL_POINTS:
+            raise ValueError(f"WakeModel: eval_points must be one of {EVAL_POINTS}, got {eval_points!r}")
+        if rotational not in ROTATIONAL_METHODS:
+            raise ValueError(f"WakeModel: rotational must be one of {ROTATIONAL_METHODS}, got {rotational!r}")
+        if not (np.isfinite(kinematic_viscosity) and kinematic_viscosity > 0):
+            raise ValueError(f"WakeModel: kinematic_viscosity must be finite and > 0, got {kinematic_viscosity!r}")
+        if not (np.isfinite(span_tol) and 0 < span_tol < 1):
+            raise ValueError(f"WakeModel: span_tol must be in (0, 1), got {span_tol!r}")
+        self.vehicles = vehicles
+        self.core = core
+        self.eval_points = eval_points
+        self.rotational = rotational
+        self.kinematic_viscosity = float(kinematic_viscosity)
+        self.template = build_template(vehicles)
+        t = self.template
+        self.eval_b = t.control_b if eval_points == "control" else t.quarter_chord_b
+        self.grad_w = gradient_weights(t, self.eval_b, rotational, span_tol)
+        self._core_mode = CORES[core]
+        self._geometry_args = (
+            t.knot_x1_b, t.knot_x3_b, t.knot_vehicle, t.knot_surface,
+            t.surface_origin_b, t.surface_vehicle, t.surface_knot_start, t.surface_panel_start, t.surface_core_scale,
+        )
+
+    @property
+    def n_vehicles(self) -> int:
+        return self.template.n_vehicles
+
+    @property
+    def n_panels(self) -> int:
+        return self.template.n_panels
+
+    def _check_state(self, state: FormationState) -> FormationState:
+        if not isinstance(state, FormationState):
+            raise ValueError(f"WakeModel: state must be a FormationState, got {type(state).__name__}")
+        if state.n_vehicles != self.n_vehicles:
+            raise ValueError(f"WakeModel: state has {state.n_vehicles} vehicles, the model {self.n_vehicles}")
+        return state
+
+    def evaluate(self, state: FormationState) -> WakeSolution:
+        """Joint solve of every vehicle's circulation and the effective induced wind on each."""
+        state = self._check_state(state)
+        t = self.template
+        b, v, n = state.batch_size, self.n_vehicles, self.n_panels
+        gamma = np.empty((b, n))
+        vpts = np.empty((b, n, 3))
+        out = [np.empty((b, v, 3)) for _ in range(4)]
+        kernel = kernels.evaluate_batch_parallel if b >= _PARALLEL_MIN_BATCH else kernels.evaluate_batch_serial
+        kernel(
+            state.position_ned, state.euler_rad, state.airspeed_mps, state.alpha_rad, state.beta_rad,
+            *self._geometry_args[:4], *self._geometry_args[4:],
+            t.panel_left_knot, t.panel_vehicle, t.control_b, t.normal_b, self.eval_b, self.grad_w,
+            t.vehicle_panel_start, t.cutoff_m, self._core_mode, self.kinematic_viscosity,
+            gamma, vpts, *out,
+        )
+        return WakeSolution(gamma, vpts, *out)
+
+    def induced_velocity(
+        self,
+        state: FormationState,
+        solution: WakeSolution,
+        points_ned: np.ndarray,
+        exclude_vehicle: int | np.ndarray | None = None,
+    ) -> np.ndarray:
+        """Induced velocity (m/s, NED) at arbitrary field points.
+
+        points_ned: (B, P, 3) or (P, 3) (shared by all formations). exclude_vehicle: a vehicle
+        index (or one per point) whose own horseshoes are left out; None includes all.
+        """
+        state = self._check_state(state)
+        pts = np.asarray(points_ned, dtype=float)
+        if pts.ndim == 2:
+            pts = np.broadcast_to(pts, (state.batch_size,) + pts.shape)
+        if pts.ndim != 3 or pts.shape[0] != state.batch_size or pts.shape[-1] != 3:
+            raise ValueError(f"induced_velocity: points_ned must have shape (P, 3) or (B, P, 3), got {np.shape(points_ned)}")
+        if not np.all(np.isfinite(pts)):
+            raise ValueError("induced_velocity: points_ned must be finite")
+        excl = np.full(pts.shape[1], -1, dtype=np.int64) if exclude_vehicle is None else np.broadcast_to(
+            np.asarray(exclude_vehicle, dtype=np.int64), (pts.shape[1],))
+        out = np.empty(pts.shape)
+        kernels.field_velocity_batch(
+            np.ascontiguousarray(pts), np.ascontiguousarray(excl),
+            state.position_ned, state.euler_rad, state.airspeed_mps, state.alpha_rad, state.beta_rad,
+            np.ascontiguousarray(solution.circulation), *self._geometry_args,
+            self.template.cutoff_m, self._core_mode, self.kinematic_viscosity, out,
+        )
+        return out
+
+    def points_ned(self, state: FormationState, which: str = "eval") -> np.ndarray:
+        """NED positions (B, N, 3) of every panel's ``eval`` / ``control`` / ``quarter_chord`` point."""
+        t = self.template
+        pb = {"eval": self.eval_b, "control": t.control_b, "quarter_chord": t.quarter_chord_b}[which]
+        return _body_points_to_ned(state, pb, t.panel_vehicle)
+
+    def knots_ned(self, state: FormationState) -> tuple[np.ndarray, np.ndarray]:
+        """NED quarter-chord and three-quarter-chord knots (B, K, 3) (for plots and loads)."""
+        t = self.template
+        return (_body_points_to_ned(state, t.knot_x1_b, t.knot_vehicle),
+                _body_points_to_ned(state, t.knot_x3_b, t.knot_vehicle))
+
+
+def _body_points_to_ned(state: FormationState, points_b: np.ndarray, owner: np.ndarray) -> np.ndarray:
+    from ..frames import dcm_ned_to_body
+
+    rot = dcm_ned_to_body(state.euler_rad)  # (B, V, 3, 3)
+    r = rot[:, owner]  # (B, P, 3, 3)
+    return state.position_ned[:, owner] + np.einsum("bpji,pj->bpi", r, points_b)
