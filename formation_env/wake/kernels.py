@@ -218,13 +218,14 @@ def assemble_and_solve(
 
 @_jit
 def field_velocity(
-    px, py, pz, exclude_vehicle,
+    px, py, pz, vehicle_filter, keep_only,
     x1, x3, trail, origin, airspeed, gamma,
     knot_vehicle, knot_surface, surface_knot_start, surface_panel_start, surface_vehicle, surface_core_scale,
     cutoff, core_mode, nu,
 ):
-    """Velocity induced at one field point by every horseshoe except those of ``exclude_vehicle``
-    (-1 excludes none), Eqs. 4.70-4.75: bound and chordwise branches plain Biot-Savart (clipped at
+    """Velocity induced at one field point by the horseshoes of every vehicle except
+    ``vehicle_filter`` (-1 excludes none) or, with ``keep_only``, of that vehicle alone
+    (Eqs. 4.70-4.75): bound and chordwise branches plain Biot-Savart (clipped at
     ``cutoff`` so that overlapping vehicles stay finite), trailing legs with the viscous core of
     age tau = |P - source surface origin| / V_source (``core_mode`` 0 plain, 1 Lamb-Oseen,
     2 Kurylowich)."""
@@ -234,7 +235,7 @@ def field_velocity(
     n_surf = surface_vehicle.shape[0]
     for s in range(n_surf):
         src = surface_vehicle[s]
-        if src == exclude_vehicle:
+        if (src == vehicle_filter) != keep_only:
             continue
         rc = 0.0
         if core_mode != CORE_NONE:
@@ -298,7 +299,7 @@ def evaluate_one(
     for j in range(n_panels):
         v = panel_vehicle[j]
         to_ned(rot[v], pos[v], eval_b[j], pt)
-        wx, wy, wz = field_velocity(pt[0], pt[1], pt[2], v, x1, x3, trail, origin, airspeed, gamma_out,
+        wx, wy, wz = field_velocity(pt[0], pt[1], pt[2], v, False, x1, x3, trail, origin, airspeed, gamma_out,
                                     knot_vehicle, knot_surface, surface_knot_start, surface_panel_start,
                                     surface_vehicle, surface_core_scale, cutoff, core_mode, nu)
         vpts_out[j, 0] = wx
@@ -367,12 +368,13 @@ evaluate_batch_parallel = _make_batch(True)
 
 @nb.njit(cache=True, parallel=True, error_model="numpy")
 def field_velocity_batch(
-    points, exclude_vehicle, pos, euler, airspeed, alpha, beta, gamma,
+    points, vehicle_filter, keep_only, pos, euler, airspeed, alpha, beta, gamma,
     knot_x1_b, knot_x3_b, knot_vehicle, knot_surface,
     surface_origin_b, surface_vehicle, surface_knot_start, surface_panel_start, surface_core_scale,
     cutoff, core_mode, nu, out,
 ):
-    """Induced velocity (NED) at arbitrary points (B, P, 3) for solved circulations (B, N)."""
+    """Induced velocity (NED) at arbitrary points (B, P, 3) for solved circulations (B, N);
+    ``vehicle_filter`` (P,) and ``keep_only`` as in :func:`field_velocity`."""
     nb_ = pos.shape[0]
     nv = pos.shape[1]
     n_knots = knot_x1_b.shape[0]
@@ -387,7 +389,7 @@ def field_velocity_batch(
         place_lattice(pos[b], euler[b], airspeed[b], alpha[b], beta[b], knot_x1_b, knot_x3_b, knot_vehicle,
                       surface_origin_b, surface_vehicle, rot, vel, trail, x1, x3, origin)
         for p in range(points.shape[1]):
-            wx, wy, wz = field_velocity(points[b, p, 0], points[b, p, 1], points[b, p, 2], exclude_vehicle[p],
+            wx, wy, wz = field_velocity(points[b, p, 0], points[b, p, 1], points[b, p, 2], vehicle_filter[p], keep_only,
                                         x1, x3, trail, origin, airspeed[b], gamma[b],
                                         knot_vehicle, knot_surface, surface_knot_start, surface_panel_start,
                                         surface_vehicle, surface_core_scale, cutoff, core_mode, nu)

@@ -154,11 +154,16 @@ class WakeModel:
         solution: WakeSolution,
         points_ned: np.ndarray,
         exclude_vehicle: int | np.ndarray | None = None,
+        *,
+        only_vehicle: int | np.ndarray | None = None,
+        core: str | None = None,
     ) -> np.ndarray:
         """Induced velocity (m/s, NED) at arbitrary field points.
 
         points_ned: (B, P, 3) or (P, 3) (shared by all formations). exclude_vehicle: a vehicle
         index (or one per point) whose own horseshoes are left out; None includes all.
+        only_vehicle: instead, keep only that vehicle's horseshoes. core: override the model's
+        viscous core for this call (e.g. ``"none"`` for the AIC-consistent law).
         """
         state = self._check_state(state)
         pts = np.asarray(points_ned, dtype=float)
@@ -168,14 +173,22 @@ class WakeModel:
             raise ValueError(f"induced_velocity: points_ned must have shape (P, 3) or (B, P, 3), got {np.shape(points_ned)}")
         if not np.all(np.isfinite(pts)):
             raise ValueError("induced_velocity: points_ned must be finite")
-        excl = np.full(pts.shape[1], -1, dtype=np.int64) if exclude_vehicle is None else np.broadcast_to(
-            np.asarray(exclude_vehicle, dtype=np.int64), (pts.shape[1],))
+        if exclude_vehicle is not None and only_vehicle is not None:
+            raise ValueError("induced_velocity: give exclude_vehicle or only_vehicle, not both")
+        chosen = only_vehicle if only_vehicle is not None else exclude_vehicle
+        vf = np.full(pts.shape[1], -1, dtype=np.int64) if chosen is None else np.broadcast_to(
+            np.asarray(chosen, dtype=np.int64), (pts.shape[1],))
+        if np.any((vf < -1) | (vf >= self.n_vehicles)):
+            raise ValueError(f"induced_velocity: vehicle index out of range 0..{self.n_vehicles - 1}: {chosen!r}")
+        if core is not None and core not in CORES:
+            raise ValueError(f"induced_velocity: core must be one of {tuple(CORES)}, got {core!r}")
+        core_mode = self._core_mode if core is None else CORES[core]
         out = np.empty(pts.shape)
         kernels.field_velocity_batch(
-            np.ascontiguousarray(pts), np.ascontiguousarray(excl),
+            np.ascontiguousarray(pts), np.ascontiguousarray(vf), only_vehicle is not None,
             state.position_ned, state.euler_rad, state.airspeed_mps, state.alpha_rad, state.beta_rad,
             np.ascontiguousarray(solution.circulation), *self._geometry_args,
-            self.template.cutoff_m, self._core_mode, self.kinematic_viscosity, out,
+            self.template.cutoff_m, core_mode, self.kinematic_viscosity, out,
         )
         return out
 
