@@ -35,58 +35,6 @@ _jit = nb.njit(cache=True, fastmath=False, error_model="numpy")
 
 
 @_jit
-def segment_velocity(px, py, pz, ax, ay, az, bx, by, bz, cutoff):
-    """Velocity at P induced by a unit-strength straight vortex A -> B (Biot-Savart, Eq. 4.35),
-    the distance to the branch line clipped from below at ``cutoff`` (Eq. 4.39; 0 = plain)."""
-    dx, dy, dz = bx - ax, by - ay, bz - az
-    length = math.sqrt(dx * dx + dy * dy + dz * dz)
-    if length <= 0.0:  # zero-length branch (pointed tip): contributes nothing
-        return 0.0, 0.0, 0.0
-    dx /= length
-    dy /= length
-    dz /= length
-    r1x, r1y, r1z = px - ax, py - ay, pz - az
-    r2x, r2y, r2z = px - bx, py - by, pz - bz
-    cx = dy * r1z - dz * r1y
-    cy = dz * r1x - dx * r1z
-    cz = dx * r1y - dy * r1x
-    h = math.sqrt(cx * cx + cy * cy + cz * cz)
-    if h < _TINY_H:
-        return 0.0, 0.0, 0.0
-    n1 = math.sqrt(r1x * r1x + r1y * r1y + r1z * r1z)
-    n2 = math.sqrt(r2x * r2x + r2y * r2y + r2z * r2z)
-    cos_g = (dx * r1x + dy * r1y + dz * r1z) / n1
-    cos_d = (dx * r2x + dy * r2y + dz * r2z) / n2
-    f = (cos_g - cos_d) / (FOUR_PI * h * max(h, cutoff))
-    return f * cx, f * cy, f * cz
-
-
-@_jit
-def leg_velocity(px, py, pz, ax, ay, az, tx, ty, tz, cutoff, core_radius):
-    """Velocity at P induced by a unit-strength semi-infinite vortex starting at A and running to
-    infinity along the unit vector t (Eqs. 4.62, 4.75).
-
-    ``core_radius > 0`` applies the viscous core factor 1 - exp(-1.26 (h/rc)^2) (Lamb-Oseen /
-    Kurylowich profile); otherwise the plain law with h clipped at ``cutoff``.
-    """
-    r1x, r1y, r1z = px - ax, py - ay, pz - az
-    cx = ty * r1z - tz * r1y
-    cy = tz * r1x - tx * r1z
-    cz = tx * r1y - ty * r1x
-    h2 = cx * cx + cy * cy + cz * cz
-    h = math.sqrt(h2)
-    if h < _TINY_H:
-        return 0.0, 0.0, 0.0
-    n1 = math.sqrt(r1x * r1x + r1y * r1y + r1z * r1z)
-    cos_g = (tx * r1x + ty * r1y + tz * r1z) / n1
-    if core_radius > 0.0:
-        f = (cos_g + 1.0) * (-math.expm1(-1.26 * h2 / (core_radius * core_radius))) / (FOUR_PI * h2)
-    else:
-        f = (cos_g + 1.0) / (FOUR_PI * h * max(h, cutoff))
-    return f * cx, f * cy, f * cz
-
-
-@_jit
 def lu_solve_inplace(a, rhs):
     """Solve a x = rhs by Gaussian elimination with partial pivoting (a and rhs are overwritten;
     x is returned in rhs). The AIC is small and dense, so this beats a LAPACK call's overhead."""
@@ -182,10 +130,86 @@ def to_ned(rot_v, pos_v, pb, out):
 
 
 @_jit
+def branch_directions(x1, x3, knot_surface, surface_knot_start, bound_dir, chord_dir):
+    """Unit directions of every bound vortex X1[k] -> X1[k+1] (zero for a surface's last knot)
+    and chordwise branch X3[k] -> X1[k] (zero where the chord vanishes, e.g. a pointed tip)."""
+    n_knots = x1.shape[0]
+    for k in range(n_knots):
+        s = knot_surface[k]
+        for i in range(3):
+            bound_dir[k, i] = 0.0
+            chord_dir[k, i] = 0.0
+        if k + 1 < surface_knot_start[s + 1]:
+            dx, dy, dz = x1[k + 1, 0] - x1[k, 0], x1[k + 1, 1] - x1[k, 1], x1[k + 1, 2] - x1[k, 2]
+            ln = math.sqrt(dx * dx + dy * dy + dz * dz)
+            if ln > 0.0:
+                bound_dir[k, 0], bound_dir[k, 1], bound_dir[k, 2] = dx / ln, dy / ln, dz / ln
+        dx, dy, dz = x1[k, 0] - x3[k, 0], x1[k, 1] - x3[k, 1], x1[k, 2] - x3[k, 2]
+        ln = math.sqrt(dx * dx + dy * dy + dz * dz)
+        if ln > 0.0:
+            chord_dir[k, 0], chord_dir[k, 1], chord_dir[k, 2] = dx / ln, dy / ln, dz / ln
+
+
+@_jit
+def point_to_knots(px, py, pz, x1, x3, k0, k1, r1, inv1, r3, inv3):
+    """Vectors from the knots k0..k1-1 to P and their inverse lengths (shared by the up to five
+    branches meeting at each knot)."""
+    for k in range(k0, k1):
+        ax, ay, az = px - x1[k, 0], py - x1[k, 1], pz - x1[k, 2]
+        r1[k, 0], r1[k, 1], r1[k, 2] = ax, ay, az
+        n = math.sqrt(ax * ax + ay * ay + az * az)
+        inv1[k] = 1.0 / n if n > 0.0 else 0.0
+        bx, by, bz = px - x3[k, 0], py - x3[k, 1], pz - x3[k, 2]
+        r3[k, 0], r3[k, 1], r3[k, 2] = bx, by, bz
+        n = math.sqrt(bx * bx + by * by + bz * bz)
+        inv3[k] = 1.0 / n if n > 0.0 else 0.0
+
+
+@_jit
+def branch(dx, dy, dz, ax, ay, az, inv_a, bx, by, bz, inv_b, cutoff):
+    """Unit-strength straight branch A -> B of unit direction d, seen from P with a = P - A and
+    b = P - B: Gamma/(4 pi h) (cos gamma - cos delta) along d x a / h (Eq. 4.35), h clipped at
+    ``cutoff`` (Eq. 4.39). A zero direction (zero-length branch) or a point on the line gives 0."""
+    cx = dy * az - dz * ay
+    cy = dz * ax - dx * az
+    cz = dx * ay - dy * ax
+    h2 = cx * cx + cy * cy + cz * cz
+    if h2 < _TINY_H * _TINY_H:
+        return 0.0, 0.0, 0.0
+    cos_g = (dx * ax + dy * ay + dz * az) * inv_a
+    cos_d = (dx * bx + dy * by + dz * bz) * inv_b
+    denom = h2 if h2 >= cutoff * cutoff else math.sqrt(h2) * cutoff
+    f = (cos_g - cos_d) / (FOUR_PI * denom)
+    return f * cx, f * cy, f * cz
+
+
+@_jit
+def leg(tx, ty, tz, ax, ay, az, inv_a, cutoff, core_radius):
+    """Unit-strength semi-infinite trailing leg from A to infinity along t, seen from P (a = P - A);
+    viscous core factor 1 - exp(-1.26 (h/rc)^2) when ``core_radius`` > 0, else h clipped at cutoff."""
+    cx = ty * az - tz * ay
+    cy = tz * ax - tx * az
+    cz = tx * ay - ty * ax
+    h2 = cx * cx + cy * cy + cz * cz
+    if h2 < _TINY_H * _TINY_H:
+        return 0.0, 0.0, 0.0
+    cos_g = (tx * ax + ty * ay + tz * az) * inv_a
+    if core_radius > 0.0:
+        x = 1.26 * h2 / (core_radius * core_radius)
+        # Beyond x = 40 the factor 1 - exp(-x) rounds to exactly 1.0: skip the exponential.
+        core = 1.0 if x > 40.0 else -math.expm1(-x)
+        f = (cos_g + 1.0) * core / (FOUR_PI * h2)
+    else:
+        denom = h2 if h2 >= cutoff * cutoff else math.sqrt(h2) * cutoff
+        f = (cos_g + 1.0) / (FOUR_PI * denom)
+    return f * cx, f * cy, f * cz
+
+
+@_jit
 def assemble_and_solve(
-    x1, x3, trail, vel, rot, pos,
-    knot_vehicle, knot_surface, surface_knot_start, panel_left_knot, panel_vehicle,
-    control_b, normal_b, cutoff, aic, gamma,
+    x1, x3, bound_dir, chord_dir, trail, vel, rot, pos,
+    knot_vehicle, panel_left_knot, panel_vehicle,
+    control_b, normal_b, cutoff, aic, gamma, r1, inv1, r3, inv3,
 ):
     """Build the AIC over every panel of every vehicle and solve for the circulations (4.25-4.69).
 
@@ -202,15 +226,18 @@ def assemble_and_solve(
         to_ned(rot[vj], pos[vj], control_b[j], cp)
         for i in range(3):
             nrm[i] = rot[vj, 0, i] * normal_b[j, 0] + rot[vj, 1, i] * normal_b[j, 1] + rot[vj, 2, i] * normal_b[j, 2]
-        # L-lines of every knot, projected on the normal.
+        point_to_knots(cp[0], cp[1], cp[2], x1, x3, 0, n_knots, r1, inv1, r3, inv3)
+        # L-line of every knot (inf -> X3 -> X1), projected on the normal.
         for k in range(n_knots):
             t = trail[knot_vehicle[k]]
-            lx, ly, lz = leg_velocity(cp[0], cp[1], cp[2], x3[k, 0], x3[k, 1], x3[k, 2], t[0], t[1], t[2], cutoff, 0.0)
-            sx, sy, sz = segment_velocity(cp[0], cp[1], cp[2], x3[k, 0], x3[k, 1], x3[k, 2], x1[k, 0], x1[k, 1], x1[k, 2], cutoff)
+            lx, ly, lz = leg(t[0], t[1], t[2], r3[k, 0], r3[k, 1], r3[k, 2], inv3[k], cutoff, 0.0)
+            sx, sy, sz = branch(chord_dir[k, 0], chord_dir[k, 1], chord_dir[k, 2], r3[k, 0], r3[k, 1], r3[k, 2], inv3[k],
+                                r1[k, 0], r1[k, 1], r1[k, 2], inv1[k], cutoff)
             wl[k] = (sx - lx) * nrm[0] + (sy - ly) * nrm[1] + (sz - lz) * nrm[2]
         for p in range(n_panels):
             k = panel_left_knot[p]
-            bx, by, bz = segment_velocity(cp[0], cp[1], cp[2], x1[k, 0], x1[k, 1], x1[k, 2], x1[k + 1, 0], x1[k + 1, 1], x1[k + 1, 2], cutoff)
+            bx, by, bz = branch(bound_dir[k, 0], bound_dir[k, 1], bound_dir[k, 2], r1[k, 0], r1[k, 1], r1[k, 2], inv1[k],
+                                r1[k + 1, 0], r1[k + 1, 1], r1[k + 1, 2], inv1[k + 1], cutoff)
             aic[j, p] = wl[k] + bx * nrm[0] + by * nrm[1] + bz * nrm[2] - wl[k + 1]
         gamma[j] = vel[vj, 0] * nrm[0] + vel[vj, 1] * nrm[1] + vel[vj, 2] * nrm[2]
     lu_solve_inplace(aic, gamma)
@@ -219,15 +246,15 @@ def assemble_and_solve(
 @_jit
 def field_velocity(
     px, py, pz, vehicle_filter, keep_only,
-    x1, x3, trail, origin, airspeed, gamma,
-    knot_vehicle, knot_surface, surface_knot_start, surface_panel_start, surface_vehicle, surface_core_scale,
-    cutoff, core_mode, nu,
+    x1, x3, bound_dir, chord_dir, trail, origin, airspeed, gamma,
+    surface_knot_start, surface_panel_start, surface_vehicle, surface_core_scale,
+    cutoff, core_mode, nu, r1, inv1, r3, inv3,
 ):
     """Velocity induced at one field point by the horseshoes of every vehicle except
     ``vehicle_filter`` (-1 excludes none) or, with ``keep_only``, of that vehicle alone
-    (Eqs. 4.70-4.75): bound and chordwise branches plain Biot-Savart (clipped at
-    ``cutoff`` so that overlapping vehicles stay finite), trailing legs with the viscous core of
-    age tau = |P - source surface origin| / V_source (``core_mode`` 0 plain, 1 Lamb-Oseen,
+    (Eqs. 4.70-4.75): bound and chordwise branches plain Biot-Savart (clipped at ``cutoff`` so
+    that overlapping vehicles stay finite), trailing legs with the viscous core of age
+    tau = |P - source surface origin| / V_source (``core_mode`` 0 plain, 1 Lamb-Oseen,
     2 Kurylowich)."""
     vx = 0.0
     vy = 0.0
@@ -247,6 +274,7 @@ def field_velocity(
         k0 = surface_knot_start[s]
         k1 = surface_knot_start[s + 1]
         p0 = surface_panel_start[s]
+        point_to_knots(px, py, pz, x1, x3, k0, k1, r1, inv1, r3, inv3)
         for k in range(k0, k1):
             # Net strength of knot k's L-line: +Gamma of the panel on its right, -Gamma of the left one.
             g = 0.0
@@ -255,14 +283,16 @@ def field_velocity(
             if k > k0:
                 g -= gamma[p0 + (k - k0) - 1]
             if g != 0.0:
-                lx, ly, lz = leg_velocity(px, py, pz, x3[k, 0], x3[k, 1], x3[k, 2], t[0], t[1], t[2], cutoff, rc)
-                sx, sy, sz = segment_velocity(px, py, pz, x3[k, 0], x3[k, 1], x3[k, 2], x1[k, 0], x1[k, 1], x1[k, 2], cutoff)
+                lx, ly, lz = leg(t[0], t[1], t[2], r3[k, 0], r3[k, 1], r3[k, 2], inv3[k], cutoff, rc)
+                sx, sy, sz = branch(chord_dir[k, 0], chord_dir[k, 1], chord_dir[k, 2], r3[k, 0], r3[k, 1], r3[k, 2],
+                                    inv3[k], r1[k, 0], r1[k, 1], r1[k, 2], inv1[k], cutoff)
                 vx += g * (sx - lx)
                 vy += g * (sy - ly)
                 vz += g * (sz - lz)
             if k < k1 - 1:
                 gp = gamma[p0 + (k - k0)]
-                bx, by, bz = segment_velocity(px, py, pz, x1[k, 0], x1[k, 1], x1[k, 2], x1[k + 1, 0], x1[k + 1, 1], x1[k + 1, 2], cutoff)
+                bx, by, bz = branch(bound_dir[k, 0], bound_dir[k, 1], bound_dir[k, 2], r1[k, 0], r1[k, 1], r1[k, 2],
+                                    inv1[k], r1[k + 1, 0], r1[k + 1, 1], r1[k + 1, 2], inv1[k + 1], cutoff)
                 vx += gp * bx
                 vy += gp * by
                 vz += gp * bz
@@ -292,16 +322,23 @@ def evaluate_one(
     origin = np.empty((n_surf, 3))
     place_lattice(pos, euler, airspeed, alpha, beta, knot_x1_b, knot_x3_b, knot_vehicle,
                   surface_origin_b, surface_vehicle, rot, vel, trail, x1, x3, origin)
+    bound_dir = np.empty((n_knots, 3))
+    chord_dir = np.empty((n_knots, 3))
+    branch_directions(x1, x3, knot_surface, surface_knot_start, bound_dir, chord_dir)
+    r1 = np.empty((n_knots, 3))
+    r3 = np.empty((n_knots, 3))
+    inv1 = np.empty(n_knots)
+    inv3 = np.empty(n_knots)
     aic = np.empty((n_panels, n_panels))
-    assemble_and_solve(x1, x3, trail, vel, rot, pos, knot_vehicle, knot_surface, surface_knot_start,
-                       panel_left_knot, panel_vehicle, control_b, normal_b, cutoff, aic, gamma_out)
+    assemble_and_solve(x1, x3, bound_dir, chord_dir, trail, vel, rot, pos, knot_vehicle,
+                       panel_left_knot, panel_vehicle, control_b, normal_b, cutoff, aic, gamma_out, r1, inv1, r3, inv3)
     pt = np.empty(3)
     for j in range(n_panels):
         v = panel_vehicle[j]
         to_ned(rot[v], pos[v], eval_b[j], pt)
-        wx, wy, wz = field_velocity(pt[0], pt[1], pt[2], v, False, x1, x3, trail, origin, airspeed, gamma_out,
-                                    knot_vehicle, knot_surface, surface_knot_start, surface_panel_start,
-                                    surface_vehicle, surface_core_scale, cutoff, core_mode, nu)
+        wx, wy, wz = field_velocity(pt[0], pt[1], pt[2], v, False, x1, x3, bound_dir, chord_dir, trail, origin,
+                                    airspeed, gamma_out, surface_knot_start, surface_panel_start,
+                                    surface_vehicle, surface_core_scale, cutoff, core_mode, nu, r1, inv1, r3, inv3)
         vpts_out[j, 0] = wx
         vpts_out[j, 1] = wy
         vpts_out[j, 2] = wz
@@ -388,11 +425,51 @@ def field_velocity_batch(
         origin = np.empty((n_surf, 3))
         place_lattice(pos[b], euler[b], airspeed[b], alpha[b], beta[b], knot_x1_b, knot_x3_b, knot_vehicle,
                       surface_origin_b, surface_vehicle, rot, vel, trail, x1, x3, origin)
+        bound_dir = np.empty((n_knots, 3))
+        chord_dir = np.empty((n_knots, 3))
+        branch_directions(x1, x3, knot_surface, surface_knot_start, bound_dir, chord_dir)
+        r1 = np.empty((n_knots, 3))
+        r3 = np.empty((n_knots, 3))
+        inv1 = np.empty(n_knots)
+        inv3 = np.empty(n_knots)
         for p in range(points.shape[1]):
             wx, wy, wz = field_velocity(points[b, p, 0], points[b, p, 1], points[b, p, 2], vehicle_filter[p], keep_only,
-                                        x1, x3, trail, origin, airspeed[b], gamma[b],
-                                        knot_vehicle, knot_surface, surface_knot_start, surface_panel_start,
-                                        surface_vehicle, surface_core_scale, cutoff, core_mode, nu)
+                                        x1, x3, bound_dir, chord_dir, trail, origin, airspeed[b], gamma[b],
+                                        surface_knot_start, surface_panel_start,
+                                        surface_vehicle, surface_core_scale, cutoff, core_mode, nu, r1, inv1, r3, inv3)
             out[b, p, 0] = wx
             out[b, p, 1] = wy
             out[b, p, 2] = wz
+
+
+@_jit
+def segment_velocity(p, a, b, cutoff):
+    """Velocity (3,) at point p induced by a unit-strength straight vortex a -> b (plain
+    Biot-Savart, h clipped at ``cutoff``); a convenience wrapper of :func:`branch` for tests/plots."""
+    d = b - a
+    ln = math.sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2])
+    out = np.zeros(3)
+    if ln == 0.0:
+        return out
+    d = d / ln
+    ra = p - a
+    rb = p - b
+    na = math.sqrt(ra[0] * ra[0] + ra[1] * ra[1] + ra[2] * ra[2])
+    nb_ = math.sqrt(rb[0] * rb[0] + rb[1] * rb[1] + rb[2] * rb[2])
+    if na == 0.0 or nb_ == 0.0:
+        return out
+    out[0], out[1], out[2] = branch(d[0], d[1], d[2], ra[0], ra[1], ra[2], 1.0 / na, rb[0], rb[1], rb[2], 1.0 / nb_, cutoff)
+    return out
+
+
+@_jit
+def leg_velocity(p, a, t, cutoff, core_radius):
+    """Velocity (3,) at p induced by a unit-strength semi-infinite vortex from a along the unit
+    vector t; wrapper of :func:`leg` for tests and plots."""
+    ra = p - a
+    na = math.sqrt(ra[0] * ra[0] + ra[1] * ra[1] + ra[2] * ra[2])
+    out = np.zeros(3)
+    if na == 0.0:
+        return out
+    out[0], out[1], out[2] = leg(t[0], t[1], t[2], ra[0], ra[1], ra[2], 1.0 / na, cutoff, core_radius)
+    return out
