@@ -9,6 +9,7 @@ gives bit-for-bit the same numbers as B single runs.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import lru_cache
 
 import numpy as np
 
@@ -250,8 +251,19 @@ def _check_dt(dt) -> float:
     return dt
 
 
+@lru_cache(maxsize=16)
+def _packed(params: AerosondeParams, options: ModelOptions):
+    from .kernels import pack
+
+    return pack(params, options)
+
+
+BACKENDS = ("numba", "numpy")
+
+
 def step(state, controls, wind: WindInput | None = None, dt: float = 0.02,
-         params: AerosondeParams = AEROSONDE, options: ModelOptions = DEFAULT_OPTIONS) -> np.ndarray:
+         params: AerosondeParams = AEROSONDE, options: ModelOptions = DEFAULT_OPTIONS,
+         backend: str = "numba") -> np.ndarray:
     """Advance B aircraft by one fixed RK4 step of ``dt`` seconds; a pure function.
 
     ``state`` (B, 16), ``controls`` (B, 4|5) held over the step, ``wind`` a WindInput (or None)
@@ -262,12 +274,23 @@ def step(state, controls, wind: WindInput | None = None, dt: float = 0.02,
     alpha-dot is AeroSim's Derivative block: the backward difference of the raw angle of attack
     between successive steps, held over the step's RK4 stages. The quaternion is renormalised
     after each step (AeroSim does not; it keeps the DCM orthonormal over long RL episodes).
+
+    ``backend``: "numba" (compiled, :mod:`.kernels`, the default) or "numpy" (the vectorised
+    reference below); they agree to round-off.
     """
     s = as_state(state)
     n = s.shape[0]
     u = validate_controls(controls, n)
     wnd = _wind(wind, n)
     dt = _check_dt(dt)
+    if backend == "numba":
+        from .kernels import rk4_batch
+
+        wind_arr = np.concatenate(
+            [wnd.wind_ned, wnd.turbulence_body, wnd.ell_translational_ned, wnd.ell_rotational_body], axis=1)
+        return rk4_batch(np.ascontiguousarray(s), np.ascontiguousarray(u), wind_arr, dt, *_packed(params, options))
+    if backend != "numpy":
+        raise ValueError(f"backend must be one of {BACKENDS}, got {backend!r}")
     with np.errstate(all="ignore"):  # a diverged row must not warn-spam; check_envelope reports it
         x0 = s[:, :N_INTEGRATED]
         R = _rotation_terms(s[:, QUAT])

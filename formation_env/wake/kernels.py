@@ -206,15 +206,28 @@ def leg(tx, ty, tz, ax, ay, az, inv_a, cutoff, core_radius):
 
 
 @_jit
+def core_radius(px, py, pz, origin, s, airspeed_src, surface_core_scale, core_mode, nu):
+    """Viscous core radius of surface s's trailing legs at P: rc = C sqrt(nu tau), vortex age
+    tau = |P - surface origin| / V_source; C = 2.24 (Lamb-Oseen, Eq. 4.1) or 36.2 / cos^2 sweep
+    (Kurylowich)."""
+    ox, oy, oz = px - origin[s, 0], py - origin[s, 1], pz - origin[s, 2]
+    tau = math.sqrt(ox * ox + oy * oy + oz * oz) / airspeed_src
+    c = LAMB_OSEEN_C if core_mode == CORE_LAMB_OSEEN else KURYLOWICH_C * surface_core_scale[s]
+    return max(c * math.sqrt(nu * tau), _MIN_CORE_M)
+
+
+@_jit
 def assemble_and_solve(
-    x1, x3, bound_dir, chord_dir, trail, vel, rot, pos,
-    knot_vehicle, panel_left_knot, panel_vehicle,
-    control_b, normal_b, cutoff, aic, gamma, r1, inv1, r3, inv3,
+    x1, x3, bound_dir, chord_dir, trail, vel, rot, pos, origin, airspeed,
+    knot_vehicle, knot_surface, surface_core_scale, panel_left_knot, panel_vehicle,
+    control_b, normal_b, cutoff, aic_core_mode, nu, aic, gamma, r1, inv1, r3, inv3,
 ):
     """Build the AIC over every panel of every vehicle and solve for the circulations (4.25-4.69).
 
     Boundary condition (V_induced + V_inf) . n = 0 with V_inf = -V_vehicle: A G = V_vehicle . n.
-    All branches use the plain Biot-Savart law with the Eq. 4.31 cutoff.
+    All branches use the plain Biot-Savart law with the Eq. 4.31 cutoff (the thesis), except that
+    ``aic_core_mode`` != CORE_NONE gives the *other* vehicles' trailing legs the viscous core of the
+    field law, so that a leg passing a control point does not produce a near-singular response.
     """
     n_panels = panel_left_knot.shape[0]
     n_knots = x1.shape[0]
@@ -229,8 +242,12 @@ def assemble_and_solve(
         point_to_knots(cp[0], cp[1], cp[2], x1, x3, 0, n_knots, r1, inv1, r3, inv3)
         # L-line of every knot (inf -> X3 -> X1), projected on the normal.
         for k in range(n_knots):
-            t = trail[knot_vehicle[k]]
-            lx, ly, lz = leg(t[0], t[1], t[2], r3[k, 0], r3[k, 1], r3[k, 2], inv3[k], cutoff, 0.0)
+            src = knot_vehicle[k]
+            t = trail[src]
+            rc = 0.0
+            if aic_core_mode != CORE_NONE and src != vj:
+                rc = core_radius(cp[0], cp[1], cp[2], origin, knot_surface[k], airspeed[src], surface_core_scale, aic_core_mode, nu)
+            lx, ly, lz = leg(t[0], t[1], t[2], r3[k, 0], r3[k, 1], r3[k, 2], inv3[k], cutoff, rc)
             sx, sy, sz = branch(chord_dir[k, 0], chord_dir[k, 1], chord_dir[k, 2], r3[k, 0], r3[k, 1], r3[k, 2], inv3[k],
                                 r1[k, 0], r1[k, 1], r1[k, 2], inv1[k], cutoff)
             wl[k] = (sx - lx) * nrm[0] + (sy - ly) * nrm[1] + (sz - lz) * nrm[2]
@@ -266,10 +283,7 @@ def field_velocity(
             continue
         rc = 0.0
         if core_mode != CORE_NONE:
-            ox, oy, oz = px - origin[s, 0], py - origin[s, 1], pz - origin[s, 2]
-            tau = math.sqrt(ox * ox + oy * oy + oz * oz) / airspeed[src]
-            c = LAMB_OSEEN_C if core_mode == CORE_LAMB_OSEEN else KURYLOWICH_C * surface_core_scale[s]
-            rc = max(c * math.sqrt(nu * tau), _MIN_CORE_M)
+            rc = core_radius(px, py, pz, origin, s, airspeed[src], surface_core_scale, core_mode, nu)
         t = trail[src]
         k0 = surface_knot_start[s]
         k1 = surface_knot_start[s + 1]
@@ -305,7 +319,7 @@ def evaluate_one(
     knot_x1_b, knot_x3_b, knot_vehicle, knot_surface,
     surface_origin_b, surface_vehicle, surface_knot_start, surface_panel_start, surface_core_scale,
     panel_left_knot, panel_vehicle, control_b, normal_b, eval_b, grad_w, vehicle_panel_start,
-    cutoff, core_mode, nu,
+    cutoff, core_mode, aic_core_mode, nu,
     gamma_out, vpts_out, wind_ned_out, wind_b_out, omega_b_out, omega_ned_out,
 ):
     """One formation: pose, joint solve, induced velocity at the evaluation points (other
@@ -330,8 +344,9 @@ def evaluate_one(
     inv1 = np.empty(n_knots)
     inv3 = np.empty(n_knots)
     aic = np.empty((n_panels, n_panels))
-    assemble_and_solve(x1, x3, bound_dir, chord_dir, trail, vel, rot, pos, knot_vehicle,
-                       panel_left_knot, panel_vehicle, control_b, normal_b, cutoff, aic, gamma_out, r1, inv1, r3, inv3)
+    assemble_and_solve(x1, x3, bound_dir, chord_dir, trail, vel, rot, pos, origin, airspeed, knot_vehicle, knot_surface,
+                       surface_core_scale, panel_left_knot, panel_vehicle, control_b, normal_b, cutoff,
+                       aic_core_mode, nu, aic, gamma_out, r1, inv1, r3, inv3)
     pt = np.empty(3)
     for j in range(n_panels):
         v = panel_vehicle[j]
@@ -383,7 +398,7 @@ def _make_batch(parallel: bool):
         knot_x1_b, knot_x3_b, knot_vehicle, knot_surface,
         surface_origin_b, surface_vehicle, surface_knot_start, surface_panel_start, surface_core_scale,
         panel_left_knot, panel_vehicle, control_b, normal_b, eval_b, grad_w, vehicle_panel_start,
-        cutoff, core_mode, nu,
+        cutoff, core_mode, aic_core_mode, nu,
         gamma_out, vpts_out, wind_ned_out, wind_b_out, omega_b_out, omega_ned_out,
     ):
         for b in nb.prange(pos.shape[0]):
@@ -392,7 +407,7 @@ def _make_batch(parallel: bool):
                 knot_x1_b, knot_x3_b, knot_vehicle, knot_surface,
                 surface_origin_b, surface_vehicle, surface_knot_start, surface_panel_start, surface_core_scale,
                 panel_left_knot, panel_vehicle, control_b, normal_b, eval_b, grad_w, vehicle_panel_start,
-                cutoff, core_mode, nu,
+                cutoff, core_mode, aic_core_mode, nu,
                 gamma_out[b], vpts_out[b], wind_ned_out[b], wind_b_out[b], omega_b_out[b], omega_ned_out[b],
             )
 

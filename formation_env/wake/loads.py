@@ -99,7 +99,7 @@ def isolated_loads(model: WakeModel, state: FormationState, air_density: float =
     per_vehicle = []
     for v, vehicle in enumerate(model.vehicles):
         alone = WakeModel([vehicle], core=model.core, eval_points=model.eval_points, rotational=model.rotational,
-                          kinematic_viscosity=model.kinematic_viscosity)
+                          kinematic_viscosity=model.kinematic_viscosity, viscous_aic=model.viscous_aic)
         sv = FormationState(state.position_ned[:, v:v + 1], state.euler_rad[:, v:v + 1], state.airspeed_mps[:, v:v + 1],
                             state.alpha_rad[:, v:v + 1], state.beta_rad[:, v:v + 1])
         per_vehicle.append(vehicle_loads(alone, sv, alone.evaluate(sv), air_density))

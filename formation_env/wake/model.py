@@ -72,6 +72,12 @@ class WakeModel:
         nu of the air, m^2/s, for the vortex core growth (default ISA sea level).
     span_tol:
         Relative extent below which a direction counts as not spanned by the points (lstsq only).
+    viscous_aic:
+        True (default): the *other* vehicles' trailing legs carry the viscous core in the joint
+        solve too, so a follower's circulation (and its loads) vary smoothly as it crosses the
+        leader's trailing legs instead of spiking when a leg passes a control point. False: the
+        thesis's AIC exactly (every branch plain, Eq. 4.31 cutoff). Tables 5.2-5.4 are the same
+        to 1e-9 either way.
     """
 
     def __init__(
@@ -83,6 +89,7 @@ class WakeModel:
         rotational: str = "lstsq",
         kinematic_viscosity: float = AIR_KINEMATIC_VISCOSITY_SL,
         span_tol: float = 0.1,
+        viscous_aic: bool = True,
     ) -> None:
         vehicles = tuple(vehicles)
         if not vehicles:
@@ -105,6 +112,7 @@ class WakeModel:
         self.eval_points = eval_points
         self.rotational = rotational
         self.kinematic_viscosity = float(kinematic_viscosity)
+        self.viscous_aic = bool(viscous_aic)
         self.template = build_template(vehicles)
         t = self.template
         self.eval_b = t.control_b if eval_points == "control" else t.quarter_chord_b
@@ -143,7 +151,8 @@ class WakeModel:
             state.position_ned, state.euler_rad, state.airspeed_mps, state.alpha_rad, state.beta_rad,
             *self._geometry_args[:4], *self._geometry_args[4:],
             t.panel_left_knot, t.panel_vehicle, t.control_b, t.normal_b, self.eval_b, self.grad_w,
-            t.vehicle_panel_start, t.cutoff_m, self._core_mode, self.kinematic_viscosity,
+            t.vehicle_panel_start, t.cutoff_m, self._core_mode,
+            self._core_mode if self.viscous_aic else kernels.CORE_NONE, self.kinematic_viscosity,
             gamma, vpts, *out,
         )
         return WakeSolution(gamma, vpts, *out)

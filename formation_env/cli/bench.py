@@ -1,0 +1,52 @@
+"""``formation-env bench``: ELL (and, when present, dynamics) speed figures."""
+
+from __future__ import annotations
+
+import importlib
+import json
+import os
+import platform
+
+BENCH_MODULES = ("formation_env.wake.bench", "formation_env.aircraft.bench")
+
+
+def register(sub) -> None:
+    p = sub.add_parser("bench", help="measure ELL and dynamics speed (medians of repeated runs)")
+    p.add_argument("--json", action="store_true", help="print JSON")
+    p.add_argument("--quick", action="store_true", help="fewer repeats (for smoke tests)")
+    p.set_defaults(func=run)
+
+
+def run(args) -> int:
+    results = {"machine": {"cpus": os.cpu_count(), "python": platform.python_version(), "platform": platform.platform()}}
+    for name in BENCH_MODULES:
+        try:
+            module = importlib.import_module(name)
+        except ModuleNotFoundError as exc:
+            if exc.name == name:
+                continue
+            raise
+        results[name.split(".")[1]] = module.run_benchmarks(quick=args.quick)
+    if args.json:
+        print(json.dumps(results, indent=2))
+    else:
+        _print_human(results)
+    return 0
+
+
+def _print_human(results: dict) -> None:
+    m = results["machine"]
+    print(f"machine: {m['cpus']} CPUs, Python {m['python']}")
+    w = results.get("wake")
+    if w:
+        print(f"ELL ({w['case']}):")
+        print(f"  single evaluation      {w['single_evaluation_us']:9.1f} us   (thesis: {w['thesis_s'] * 1e3:.0f} ms;"
+              f" {w['speedup_vs_thesis']:.0f}x faster)")
+        print(f"  single incl. meshing   {w['single_with_meshing_us']:9.1f} us")
+        for b, r in w["batched"].items():
+            print(f"  batch {int(b):5d}             {r['formation_evaluations_per_s']:9.0f} formation-evaluations/s"
+                  f"  ({r['us_per_formation']:.1f} us each)")
+    for key, value in results.items():
+        if key not in ("machine", "wake"):
+            print(f"{key}:")
+            print("  " + json.dumps(value, indent=2).replace("\n", "\n  "))
