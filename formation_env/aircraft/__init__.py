@@ -11,12 +11,14 @@ Public API (everything batched over a leading axis of B aircraft):
 * :mod:`.params`: :class:`AerosondeParams`, ``AEROSONDE``.
 """
 
-from .eom import DEFAULT_OPTIONS, ModelOptions, derivatives, outputs, step, validate_controls
+from .envelope import EnvelopeLimits, Status, check_envelope, describe_status
+from .eom import DEFAULT_OPTIONS, ModelOptions, air_data_of, derivatives, outputs, step, validate_controls
 from .params import AEROSONDE, AerosondeParams
 from .state import N_STATES, STATE_NAMES, euler_angles, make_state
-from .trim import TrimResult, trim
+from .trim import TrimResult, trim, trim_state_and_controls
 
 __all__ = [
     "AEROSONDE", "AerosondeParams", "DEFAULT_OPTIONS", "ModelOptions", "N_STATES", "STATE_NAMES",
     "TrimResult", "derivatives", "euler_angles", "make_state", "outputs", "step", "trim", "validate_controls",
+    "air_data_of", "check_envelope", "describe_status", "EnvelopeLimits", "Status", "trim_state_and_controls",
 ]

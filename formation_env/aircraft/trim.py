@@ -19,7 +19,7 @@ from scipy.optimize import root
 from .. import frames
 from .eom import DEFAULT_OPTIONS, ModelOptions, derivatives, outputs
 from .params import AEROSONDE, AerosondeParams
-from .state import N_STATES, make_state
+from .state import make_state
 
 __all__ = ["TrimResult", "trim", "trim_state_and_controls"]
 
@@ -140,4 +140,4 @@ def trim(airspeed: float = 25.0, altitude: float = 1000.0, fuel: float = 2.0,
 def trim_state_and_controls(batch_size: int, **kwargs) -> tuple[np.ndarray, np.ndarray]:
     """A trim tiled for ``batch_size`` aircraft: ``(state (B, 16), controls (B, 4))``."""
     t = trim(**kwargs)
-    return np.repeat(t.state, batch_size, axis=0).reshape(batch_size, N_STATES), np.repeat(t.controls, batch_size, axis=0)
+    return np.repeat(t.state, batch_size, axis=0), np.repeat(t.controls, batch_size, axis=0)

@@ -190,3 +190,23 @@ def test_envelope_flags_airspeed_and_attitude(trim_a5):
     assert flags[2] & Status.ATTITUDE
     # a headwind raises the airspeed that the check uses
     assert check_envelope(s[:1], WindInput(wind_ned=[-20.0, 0, 0]))[0] == 0
+
+
+def test_downdraft_gust_costs_altitude_and_turbulence_stays_in_envelope(trim_a5):
+    """Open loop, the 40 s preset's downward component pushes the aircraft down relative to still
+    air; light Dryden turbulence perturbs it without leaving the envelope in 20 s."""
+    gust = thesis_gust_40s(amplitude_ned=(0.0, 0.0, 1.5))
+    t0 = 10.0
+    n = int(10.0 / DT)
+    still = _run(trim_a5.state, trim_a5.controls, n)
+    gusty = _run(trim_a5.state, trim_a5.controls, n, lambda k, s: WindInput(wind_ned=gust.wind_ned(t0 + k * DT)))
+    assert altitude(gusty)[0] < altitude(still)[0] - 1.0
+    turb = DrydenTurbulence(DrydenConfig.low_altitude(300.0, 8.0), [123])
+    s = trim_a5.state
+    vas = []
+    for _ in range(int(20.0 / DT)):
+        wind = WindInput(turbulence_body=turb.step())
+        s = step(s, trim_a5.controls, wind, DT)
+        vas.append(air_data_of(s, wind)["airspeed_raw"][0])
+        assert check_envelope(s, wind)[0] == 0
+    assert np.std(vas) > 0.1  # the turbulence did reach the aircraft
