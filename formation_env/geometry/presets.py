@@ -7,7 +7,7 @@ import math
 
 from .surface import LiftingSurface, Vehicle
 
-__all__ = ["test_wing", "delta_wing", "aerosonde", "AEROSONDE_TAIL_ARM_M", "PRESETS"]
+__all__ = ["verification_wing", "delta_wing", "aerosonde", "AEROSONDE_TAIL_ARM_M", "PRESETS"]
 
 # Distance from the wing's root quarter-chord point to the tailplane's, along body -x (m).
 # Table 6.1 gives the surfaces but not their relative position; this is the Aerosonde's wing-to-
@@ -15,10 +15,10 @@ __all__ = ["test_wing", "delta_wing", "aerosonde", "AEROSONDE_TAIL_ARM_M", "PRES
 AEROSONDE_TAIL_ARM_M = 0.85
 
 
-def test_wing(nseg: int = 5, spacing: str = "linear") -> Vehicle:
+def verification_wing(nseg: int = 5, spacing: str = "linear") -> Vehicle:
     """Table 5.1: rectangular wing, b = 1 m, AR = 6, no sweep/dihedral/twist, 5 horseshoes."""
     wing = LiftingSurface(span_m=1.0, aspect_ratio=6.0, taper=1.0, nseg=nseg, spacing=spacing, name="wing")
-    return Vehicle(surfaces=(wing,), name="test_wing")
+    return Vehicle(surfaces=(wing,), name="verification_wing")
 
 
 def delta_wing(nseg: int = 10, spacing: str = "linear") -> Vehicle:
@@ -54,4 +54,4 @@ def aerosonde(nseg: int = 10, tailplane: bool = False, tail_arm_m: float = AEROS
     return Vehicle(surfaces=tuple(surfaces), name="aerosonde")
 
 
-PRESETS = {"test_wing": test_wing, "delta_wing": delta_wing, "aerosonde": aerosonde}
+PRESETS = {"verification_wing": verification_wing, "delta_wing": delta_wing, "aerosonde": aerosonde}

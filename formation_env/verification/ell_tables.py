@@ -10,7 +10,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..frames import dcm_ned_to_body, euler_from_dcm
-from ..geometry import test_wing
+from ..geometry import verification_wing
 from ..wake import FormationState, WakeModel
 from .thesis_values import thesis_values
 
@@ -47,7 +47,7 @@ def table_5_2() -> dict:
     """Single wing, five poses: the circulation must not depend on the pose."""
     tv = thesis_values()
     v, a, b = _airdata()
-    model = WakeModel([test_wing()])
+    model = WakeModel([verification_wing()])
     poses = tv["table_5_2_poses"]
     state = FormationState.from_degrees(
         [[p["pos"]] for p in poses], [[p["euler"]] for p in poses], v, a, b)
@@ -74,7 +74,7 @@ def table_5_3() -> dict:
     thesis prints them rounded to 0.01) and checked against the printed values."""
     tv = thesis_values()
     v, a, b = _airdata()
-    model = WakeModel([test_wing(), test_wing()])
+    model = WakeModel([verification_wing(), verification_wing()])
     rows = []
     for row in tv["table_5_3_frame_invariance"]:
         re = row["RE"]
@@ -110,7 +110,7 @@ def table_5_4() -> dict:
     """Two wings heading north, the second behind and to port at growing separations."""
     tv = thesis_values()
     v, a, b = _airdata()
-    model = WakeModel([test_wing(), test_wing()])
+    model = WakeModel([verification_wing(), verification_wing()])
     cases = tv["table_5_4_two_wings_level_north"]["cases"]
     state = FormationState.from_degrees([[[0, 0, 0], c["w2_pos"]] for c in cases], np.zeros((len(cases), 2, 3)), v, a, b)
     sol = model.evaluate(state)

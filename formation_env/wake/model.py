@@ -1,8 +1,8 @@
 """ELL: the extended-lifting-line wake model of a formation (thesis chapter 4), batched.
 
->>> from formation_env.geometry import test_wing
+>>> from formation_env.geometry import verification_wing
 >>> from formation_env.wake import WakeModel, FormationState
->>> model = WakeModel([test_wing(), test_wing()])
+>>> model = WakeModel([verification_wing(), verification_wing()])
 >>> state = FormationState.from_degrees([[0, 0, 0], [-1, -1, 0]], [[0, 0, 0]] * 2, 25.0, 5.0)
 >>> sol = model.evaluate(state)
 >>> sol.wind_ned.shape      # (B, V, 3) effective induced translational wind, m/s

@@ -39,9 +39,10 @@ class FormationState:
         fields = {"position_ned": pos}
         for name in ("euler_rad",):
             arr = np.asarray(getattr(self, name), dtype=float)
-            arr = np.broadcast_to(arr, (batch, nveh, 3)) if arr.ndim <= 3 else arr
-            if arr.shape != (batch, nveh, 3):
-                raise ValueError(f"FormationState: {name} must have shape {(batch, nveh, 3)}, got {np.shape(getattr(self, name))}")
+            try:
+                arr = np.broadcast_to(arr, (batch, nveh, 3))
+            except ValueError:
+                raise ValueError(f"FormationState: {name} must have shape {(batch, nveh, 3)}, got {arr.shape}") from None
             fields[name] = arr
         for name in ("airspeed_mps", "alpha_rad", "beta_rad"):
             raw = np.asarray(getattr(self, name), dtype=float)
