@@ -2,7 +2,7 @@
 loop iteration, so one call serves B = 1 or B = 1024 with no per-operation numpy overhead.
 
 :mod:`.eom` (numpy, vectorised over the batch axis) is the readable reference; this module is
-a line-by-line transcription of it, and ``tests/aircraft/test_kernels.py`` checks the two agree to
+a line-by-line transcription of it, and ``tests/aircraft/test_aircraft_kernels.py`` checks the two agree to
 round-off. Each aircraft's arithmetic is independent of the others, so a batch reproduces B
 single runs bit for bit.
 """
