@@ -3,7 +3,7 @@ PYTHON ?= python3
 VENV   ?= .venv
 PY      = $(VENV)/bin/python
 STAMP   = $(VENV)/.installed-$(shell cat pyproject.toml | cksum | cut -d' ' -f1)
-OUT    ?= results/demo
+OUT    ?=
 
 .PHONY: demo test bench verify clean
 
@@ -20,7 +20,7 @@ $(STAMP): $(VENV)/bin/python pyproject.toml
 install: $(STAMP)
 
 demo: $(STAMP)
-	$(VENV)/bin/formation-env demo --out $(OUT)
+	$(VENV)/bin/formation-env demo $(if $(OUT),--out $(OUT),)
 
 test: $(STAMP)
 	$(PY) -m pytest
