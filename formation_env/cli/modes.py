@@ -1,8 +1,8 @@
 """``formation-env modes``: eigenvalues, damping and frequency of the Aerosonde's modes.
 
-The mode set is chosen by a *source* (``open`` today); a closed-loop source (the FCS of
-Appendix A, a later issue) plugs in by adding an entry to ``SOURCES`` and the ``--closed-loop``
-flag selecting it.
+The mode set is chosen by a *source*: ``open_loop`` (default) or ``closed_loop``
+(``--closed-loop``: the Appendix A FCS of :mod:`agents.fcs` closed around the aircraft, with each
+pole set beside Tables A.11/A.12).
 """
 
 from __future__ import annotations
@@ -27,19 +27,31 @@ def _open_loop(args) -> dict:
     }
 
 
+def _closed_loop(args) -> dict:
+    from agents.fcs.closed_loop import closed_loop_table
+    from ..aircraft.trim import trim
+
+    t = trim(args.speed, args.altitude, args.fuel)
+    table = closed_loop_table(t, alpha_dot="include" if args.alpha_dot else "omit")
+    return {"source": "closed_loop", "trim": {"airspeed": t.airspeed, "altitude": t.altitude, "fuel": t.fuel},
+            **table}
+
+
 # name -> function(args) returning {"longitudinal": {name: mode dict}, "lateral": {...}, ...}
-SOURCES: dict[str, Callable] = {"open_loop": _open_loop}
+SOURCES: dict[str, Callable] = {"open_loop": _open_loop, "closed_loop": _closed_loop}
 
 
 def register(sub) -> None:
-    p = sub.add_parser("modes", help="open-loop modes about the trim (thesis Tables A.6/A.7)")
+    p = sub.add_parser("modes", help="open-loop (Tables A.6/A.7) or closed-loop (A.11/A.12) modes about the trim")
     p.add_argument("--speed", type=float, default=25.0, help="trim airspeed, m/s (default 25)")
     p.add_argument("--altitude", type=float, default=1000.0, help="trim altitude, m (default 1000)")
     p.add_argument("--fuel", type=float, default=2.0, help="fuel, kg (default 2)")
     p.add_argument("--alpha-dot", action="store_true",
                    help="include the alpha-dot terms (the thesis tables omit them, as Simulink linmod does)")
+    p.add_argument("--closed-loop", dest="source", action="store_const", const="closed_loop", default="open_loop",
+                   help="modes with the Appendix A FCS closed around the aircraft (Tables A.11/A.12)")
     p.add_argument("--json", action="store_true", help="print JSON")
-    p.set_defaults(func=run, source="open_loop")
+    p.set_defaults(func=run)
 
 
 def _fmt(x, spec=".4g") -> str:
@@ -59,9 +71,11 @@ def run(args) -> int:
         print(f"  {group}:")
         print(f"    {'mode':<18s} {'eigenvalue':>24s} {'damping':>9s} {'wn rad/s':>9s} {'period s':>9s}")
         for name, m in result[group].items():
+            if "thesis" in m:
+                name = f"{name} (thesis {m['thesis'][0]:.3g}{' +- %.3gi' % m['thesis'][1] if m['thesis'][1] else ''})"
             lam = f"{m['real']:.4g}" + (f" +- {m['imag']:.4g}i" if m["imag"] > 0 else "")
             print(f"    {name:<18s} {lam:>24s} {_fmt(m['damping'], '.3f'):>9s} "
-                  f"{_fmt(m['natural_frequency']):>9s} {_fmt(m['period']):>9s}")
+                  f"{_fmt(m['natural_frequency']):>9s} {_fmt(m.get('period')):>9s}")
     return 0
 
 

@@ -1,5 +1,6 @@
 """Aerosonde verification sections for ``formation-env verify``: the Table A.5 trim (``trim_a5``)
-and the open-loop modes of Tables A.6/A.7 (``modes_open``), computed beside the thesis values."""
+and the open-loop modes of Tables A.6/A.7 (``modes_open``) and the closed-loop modes of Tables
+A.11/A.12 (``modes_closed``), computed beside the thesis values."""
 
 from __future__ import annotations
 
@@ -7,7 +8,7 @@ from ..aircraft.linearise import open_loop_modes
 from ..aircraft.trim import trim
 from .thesis_values import thesis_values
 
-__all__ = ["SECTIONS", "trim_a5", "modes_open"]
+__all__ = ["SECTIONS", "trim_a5", "modes_open", "modes_closed"]
 
 # Issue 3 acceptance tolerances.
 _TRIM_TOL = {"alpha_rad": 5e-4, "theta_rad": 5e-4, "elevator_rad": 1e-3, "aileron_rad": 5e-4,
@@ -84,4 +85,12 @@ def modes_open() -> dict:
     return out
 
 
-SECTIONS = {"trim_a5": trim_a5, "modes_open": modes_open}
+def modes_closed() -> dict:
+    """Closed-loop modes (the Appendix A FCS of :mod:`agents.fcs` around the Table A.5 trim,
+    alpha-dot terms omitted) against Tables A.11/A.12, 15 % of |lambda| per pole."""
+    from agents.fcs.closed_loop import closed_loop_table
+
+    return closed_loop_table(trim())
+
+
+SECTIONS = {"trim_a5": trim_a5, "modes_open": modes_open, "modes_closed": modes_closed}
