@@ -2,10 +2,11 @@
 
 from __future__ import annotations
 
-import importlib
 import json
 import os
 import platform
+
+from ._optional import import_available
 
 BENCH_MODULES = ("formation_env.wake.bench", "formation_env.aircraft.bench")
 
@@ -19,13 +20,7 @@ def register(sub) -> None:
 
 def run(args) -> int:
     results = {"machine": {"cpus": os.cpu_count(), "python": platform.python_version(), "platform": platform.platform()}}
-    for name in BENCH_MODULES:
-        try:
-            module = importlib.import_module(name)
-        except ModuleNotFoundError as exc:
-            if exc.name == name:
-                continue
-            raise
+    for name, module in import_available(BENCH_MODULES).items():
         results[name.split(".")[1]] = module.run_benchmarks(quick=args.quick)
     if args.json:
         print(json.dumps(results, indent=2))

@@ -2,10 +2,11 @@
 
 from __future__ import annotations
 
-import importlib
 import json
 
 import numpy as np
+
+from ._optional import import_available
 
 # Modules exposing SECTIONS = {key: callable returning a JSON-serialisable dict}.
 SECTION_MODULES = ("formation_env.verification.ell_tables", "formation_env.verification.aircraft")
@@ -13,13 +14,7 @@ SECTION_MODULES = ("formation_env.verification.ell_tables", "formation_env.verif
 
 def available_sections() -> dict:
     sections = {}
-    for name in SECTION_MODULES:
-        try:
-            module = importlib.import_module(name)
-        except ModuleNotFoundError as exc:
-            if exc.name == name:
-                continue
-            raise
+    for module in import_available(SECTION_MODULES).values():
         sections.update(module.SECTIONS)
     return sections
 

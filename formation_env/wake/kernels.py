@@ -314,6 +314,28 @@ def field_velocity(
 
 
 @_jit
+def posed_lattice(pos, euler, airspeed, alpha, beta, knot_x1_b, knot_x3_b, knot_vehicle, knot_surface,
+                  surface_origin_b, surface_vehicle, surface_knot_start):
+    """Pose one formation's lattice in NED (see :func:`place_lattice`), its branch directions, and
+    scratch arrays for the point-to-knot vectors."""
+    nv = pos.shape[0]
+    n_knots = knot_x1_b.shape[0]
+    rot = np.empty((nv, 3, 3))
+    vel = np.empty((nv, 3))
+    trail = np.empty((nv, 3))
+    x1 = np.empty((n_knots, 3))
+    x3 = np.empty((n_knots, 3))
+    origin = np.empty((surface_origin_b.shape[0], 3))
+    place_lattice(pos, euler, airspeed, alpha, beta, knot_x1_b, knot_x3_b, knot_vehicle,
+                  surface_origin_b, surface_vehicle, rot, vel, trail, x1, x3, origin)
+    bound_dir = np.empty((n_knots, 3))
+    chord_dir = np.empty((n_knots, 3))
+    branch_directions(x1, x3, knot_surface, surface_knot_start, bound_dir, chord_dir)
+    return (rot, vel, trail, x1, x3, origin, bound_dir, chord_dir,
+            np.empty((n_knots, 3)), np.empty(n_knots), np.empty((n_knots, 3)), np.empty(n_knots))
+
+
+@_jit
 def evaluate_one(
     pos, euler, airspeed, alpha, beta,
     knot_x1_b, knot_x3_b, knot_vehicle, knot_surface,
@@ -325,24 +347,10 @@ def evaluate_one(
     """One formation: pose, joint solve, induced velocity at the evaluation points (other
     vehicles only) and the effective translational and rotational wind per vehicle."""
     nv = pos.shape[0]
-    n_knots = knot_x1_b.shape[0]
     n_panels = panel_left_knot.shape[0]
-    n_surf = surface_origin_b.shape[0]
-    rot = np.empty((nv, 3, 3))
-    vel = np.empty((nv, 3))
-    trail = np.empty((nv, 3))
-    x1 = np.empty((n_knots, 3))
-    x3 = np.empty((n_knots, 3))
-    origin = np.empty((n_surf, 3))
-    place_lattice(pos, euler, airspeed, alpha, beta, knot_x1_b, knot_x3_b, knot_vehicle,
-                  surface_origin_b, surface_vehicle, rot, vel, trail, x1, x3, origin)
-    bound_dir = np.empty((n_knots, 3))
-    chord_dir = np.empty((n_knots, 3))
-    branch_directions(x1, x3, knot_surface, surface_knot_start, bound_dir, chord_dir)
-    r1 = np.empty((n_knots, 3))
-    r3 = np.empty((n_knots, 3))
-    inv1 = np.empty(n_knots)
-    inv3 = np.empty(n_knots)
+    rot, vel, trail, x1, x3, origin, bound_dir, chord_dir, r1, inv1, r3, inv3 = posed_lattice(
+        pos, euler, airspeed, alpha, beta, knot_x1_b, knot_x3_b, knot_vehicle, knot_surface,
+        surface_origin_b, surface_vehicle, surface_knot_start)
     aic = np.empty((n_panels, n_panels))
     assemble_and_solve(x1, x3, bound_dir, chord_dir, trail, vel, rot, pos, origin, airspeed, knot_vehicle, knot_surface,
                        surface_core_scale, panel_left_knot, panel_vehicle, control_b, normal_b, cutoff,
@@ -427,26 +435,10 @@ def field_velocity_batch(
 ):
     """Induced velocity (NED) at arbitrary points (B, P, 3) for solved circulations (B, N);
     ``vehicle_filter`` (P,) and ``keep_only`` as in :func:`field_velocity`."""
-    nb_ = pos.shape[0]
-    nv = pos.shape[1]
-    n_knots = knot_x1_b.shape[0]
-    n_surf = surface_origin_b.shape[0]
-    for b in nb.prange(nb_):
-        rot = np.empty((nv, 3, 3))
-        vel = np.empty((nv, 3))
-        trail = np.empty((nv, 3))
-        x1 = np.empty((n_knots, 3))
-        x3 = np.empty((n_knots, 3))
-        origin = np.empty((n_surf, 3))
-        place_lattice(pos[b], euler[b], airspeed[b], alpha[b], beta[b], knot_x1_b, knot_x3_b, knot_vehicle,
-                      surface_origin_b, surface_vehicle, rot, vel, trail, x1, x3, origin)
-        bound_dir = np.empty((n_knots, 3))
-        chord_dir = np.empty((n_knots, 3))
-        branch_directions(x1, x3, knot_surface, surface_knot_start, bound_dir, chord_dir)
-        r1 = np.empty((n_knots, 3))
-        r3 = np.empty((n_knots, 3))
-        inv1 = np.empty(n_knots)
-        inv3 = np.empty(n_knots)
+    for b in nb.prange(pos.shape[0]):
+        rot, vel, trail, x1, x3, origin, bound_dir, chord_dir, r1, inv1, r3, inv3 = posed_lattice(
+            pos[b], euler[b], airspeed[b], alpha[b], beta[b], knot_x1_b, knot_x3_b, knot_vehicle, knot_surface,
+            surface_origin_b, surface_vehicle, surface_knot_start)
         for p in range(points.shape[1]):
             wx, wy, wz = field_velocity(points[b, p, 0], points[b, p, 1], points[b, p, 2], vehicle_filter[p], keep_only,
                                         x1, x3, bound_dir, chord_dir, trail, origin, airspeed[b], gamma[b],
