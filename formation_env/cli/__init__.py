@@ -12,7 +12,7 @@ import argparse
 import importlib
 import sys
 
-COMMANDS = ("verify", "bench", "demo", "trim", "modes")
+COMMANDS = ("verify", "bench", "demo", "trim", "modes", "run")
 
 
 def build_parser() -> argparse.ArgumentParser:

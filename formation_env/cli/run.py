@@ -1,0 +1,38 @@
+"""``formation-env run --scenario NAME``: fly a thesis scenario with the PID agents and write
+``metrics.json`` and thesis-style figures into a fresh output directory."""
+
+from __future__ import annotations
+
+import json
+import time
+
+
+def register(sub) -> None:
+    from ..scenarios import scenario_names
+
+    p = sub.add_parser("run", help="run a thesis scenario (tracking, gust, formation_keeping, reconfiguration)")
+    p.add_argument("--scenario", required=True, help=f"one of {scenario_names()}")
+    p.add_argument("--no-wake", action="store_true", help="fly without the ELL wake interaction")
+    p.add_argument("--out", default=None, help="output directory (default results/run-<scenario>-<timestamp>)")
+    p.add_argument("--overwrite", action="store_true", help="allow writing into an existing non-empty directory")
+    p.add_argument("--duration", type=float, default=None, help="override the scenario's duration, s")
+    p.add_argument("--no-figures", action="store_true", help="write only metrics.json")
+    p.set_defaults(func=run)
+
+
+def run(args) -> int:
+    from agents.run import run_scenario_to_dir
+
+    from ..scenarios import get_scenario
+
+    get_scenario(args.scenario)  # unknown names fail before anything is created
+    out = args.out or f"results/run-{args.scenario}-{time.strftime('%Y%m%d-%H%M%S')}"
+    metrics = run_scenario_to_dir(args.scenario, out, wake=not args.no_wake, overwrite=args.overwrite,
+                                  duration_s=args.duration, figures=not args.no_figures)
+    scalars = {k: v for k, v in metrics.items() if isinstance(v, (int, float, str, bool)) or v is None}
+    print(json.dumps(scalars, indent=2))
+    print(f"wrote {out}/metrics.json and {len(metrics['figures'])} figures")
+    return 0
+
+
+__all__ = ["register", "run"]

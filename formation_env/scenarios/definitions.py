@@ -1,0 +1,163 @@
+"""Scenario definitions (pure data + small functions): the thesis's test cases.
+
+Every scenario has a *reference* that vehicle 0 tracks (a straight, level line flown at the trim
+speed from its start point, optionally displaced: the A.5.3 tracking demo) and, for formations,
+a *slot schedule* for each follower: its offset from vehicle 0 in vehicle 0's track frame
+(x forward, y starboard, z down; m) as a function of time (virtual-leader formation flight).
+Offsets move between keyframes with a raised-cosine blend (continuous rate).
+
+Frames: NED flat earth, origin at vehicle 0's start point on the ground (start altitude 1000 m).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..atmosphere.gust import TransientGust, thesis_gust_20s, thesis_gust_40s
+
+__all__ = ["AEROSONDE_SPAN_M", "SlotSchedule", "Scenario", "SCENARIOS", "get_scenario", "scenario_names"]
+
+AEROSONDE_SPAN_M = 2.9
+
+
+@dataclass(frozen=True)
+class SlotSchedule:
+    """Piecewise raised-cosine offset schedule: keyframes ``(t_s, (x, y, z) in spans)``, times
+    strictly increasing; constant before the first and after the last keyframe."""
+
+    keyframes: tuple = ((0.0, (-2.0, 1.0, 0.3)),)
+    span_m: float = AEROSONDE_SPAN_M
+
+    def __post_init__(self) -> None:
+        kf = tuple((float(t), tuple(float(v) for v in off)) for t, off in self.keyframes)
+        if not kf:
+            raise ValueError("SlotSchedule.keyframes must not be empty")
+        for t, off in kf:
+            if not math.isfinite(t) or len(off) != 3 or not all(math.isfinite(v) for v in off):
+                raise ValueError(f"SlotSchedule.keyframes entries must be (finite t, 3 finite offsets), got {(t, off)}")
+        if any(b[0] <= a[0] for a, b in zip(kf, kf[1:])):
+            raise ValueError("SlotSchedule.keyframes times must be strictly increasing")
+        if not (math.isfinite(self.span_m) and self.span_m > 0):
+            raise ValueError(f"SlotSchedule.span_m must be > 0, got {self.span_m!r}")
+        object.__setattr__(self, "keyframes", kf)
+
+    def offset_and_rate(self, t_s: float) -> tuple[np.ndarray, np.ndarray]:
+        """Offset (m, track frame) and its time derivative (m/s) at time ``t_s``."""
+        kf = self.keyframes
+        b = self.span_m
+        if t_s <= kf[0][0]:
+            return np.asarray(kf[0][1]) * b, np.zeros(3)
+        for (t0, a), (t1, c) in zip(kf, kf[1:]):
+            if t_s < t1:
+                tau = (t_s - t0) / (t1 - t0)
+                s = 0.5 * (1.0 - math.cos(math.pi * tau))
+                ds = 0.5 * math.pi * math.sin(math.pi * tau) / (t1 - t0)
+                a, c = np.asarray(a) * b, np.asarray(c) * b
+                return a + s * (c - a), ds * (c - a)
+        return np.asarray(kf[-1][1]) * b, np.zeros(3)
+
+
+@dataclass(frozen=True)
+class Scenario:
+    """One test case. ``slots[i]`` is follower ``i + 1``'s schedule relative to vehicle 0."""
+
+    name: str
+    description: str
+    duration_s: float
+    slots: tuple = ()
+    reference_offset_ned: tuple = (0.0, 0.0, 0.0)  # vehicle 0's reference displaced by this (m, NED)
+    gusts: tuple = ()  # TransientGust instances (ambient wind, the same for every vehicle)
+    airspeed_mps: float = 25.0
+    altitude_m: float = 1000.0
+    dt: float = 0.02
+    wake_default: bool = True
+    notes: dict = field(default_factory=dict)
+
+    def __post_init__(self) -> None:
+        if not self.name or not isinstance(self.name, str):
+            raise ValueError("Scenario.name must be a non-empty string")
+        for fname in ("duration_s", "airspeed_mps", "altitude_m", "dt"):
+            v = getattr(self, fname)
+            if not (math.isfinite(v) and v > 0):
+                raise ValueError(f"Scenario.{fname} must be finite and > 0, got {v!r}")
+        if not all(isinstance(s, SlotSchedule) for s in self.slots):
+            raise ValueError("Scenario.slots must be SlotSchedule instances")
+        if not all(isinstance(g, TransientGust) for g in self.gusts):
+            raise ValueError("Scenario.gusts must be TransientGust instances")
+        ref = tuple(float(v) for v in self.reference_offset_ned)
+        if len(ref) != 3 or not all(math.isfinite(v) for v in ref):
+            raise ValueError(f"Scenario.reference_offset_ned must be 3 finite numbers, got {self.reference_offset_ned!r}")
+        object.__setattr__(self, "reference_offset_ned", ref)
+
+    @property
+    def n_vehicles(self) -> int:
+        return 1 + len(self.slots)
+
+    @property
+    def n_steps(self) -> int:
+        return int(round(self.duration_s / self.dt))
+
+    def start_position_ned(self) -> np.ndarray:
+        """(V, 3) start positions: vehicle 0 at (0, 0, -altitude), followers in their first slot
+        (vehicle 0 flies north at the start)."""
+        p = np.zeros((self.n_vehicles, 3))
+        p[:, 2] = -self.altitude_m
+        for i, s in enumerate(self.slots):
+            p[i + 1] += s.offset_and_rate(0.0)[0]
+        return p
+
+    def reference(self, t_s: float) -> tuple[np.ndarray, np.ndarray]:
+        """Vehicle 0's demanded position and velocity (NED) at ``t_s``: straight and level, north."""
+        pos = np.array([self.airspeed_mps * t_s, 0.0, -self.altitude_m]) + np.asarray(self.reference_offset_ned)
+        return pos, np.array([self.airspeed_mps, 0.0, 0.0])
+
+    def ambient_wind_ned(self, t_s: float) -> np.ndarray:
+        w = np.zeros(3)
+        for g in self.gusts:
+            w = w + g.wind_ned(t_s)
+        return w
+
+
+_B = AEROSONDE_SPAN_M
+# Fig. 6.7's amplitudes are not transcribed. East 2 m/s as the gust module's preset; the downdraft
+# is chosen so that, under the FCS, the altitude drops by about 1 m while the throttle saturates
+# and the aircraft overtakes its reference after the gust, as section 6.4 describes (measured:
+# 1.1 m, 20 s saturated, overtake). The module's 1.5 m/s preset gives a 3.1 m drop instead.
+GUST_AMPLITUDE_NED = (0.0, 2.0, 0.8)
+
+SCENARIOS: dict[str, Scenario] = {
+    "tracking": Scenario(
+        "tracking", "A.5.3: from trim, track a reference 100 m north, 10 m east and 10 m below the start track",
+        duration_s=60.0, reference_offset_ned=(100.0, 10.0, 10.0), wake_default=False),
+    "gust": Scenario(
+        "gust", "6.4: straight and level through the 40 s (10-50 s) and 20 s (100-120 s) transient gusts",
+        duration_s=150.0, gusts=(thesis_gust_40s(GUST_AMPLITUDE_NED), thesis_gust_20s(GUST_AMPLITUDE_NED)),
+        wake_default=False, notes={"recovery_windows_s": {"gust_40s": 30.0, "gust_20s": 20.0},
+                                   "amplitude_choice": "down 0.8 m/s: the thesis's ~1 m altitude drop with the "
+                                   "throttle saturating and an overtake after the gust (1.5 m/s gives 3.1 m and a "
+                                   "73 m along-track lag)"}),
+    "formation_keeping": Scenario(
+        "formation_keeping", "6.5: follower 2 spans behind, 1 span starboard, 0.3 span below a straight, "
+        "level leader heading north at 25 m/s", duration_s=60.0,
+        slots=(SlotSchedule(((0.0, (-2.0, 1.0, 0.3)),)),)),
+    "reconfiguration": Scenario(
+        "reconfiguration", "6.6: follower starts 3 spans behind, 1 starboard, 0.2 below; descends about "
+        "1 span (10-15 s), overtakes (20-35 s), climbs to lead 3 spans ahead and 0.2 span above (45-50 s)",
+        duration_s=60.0,
+        slots=(SlotSchedule(((0.0, (-3.0, 1.0, 0.2)), (10.0, (-3.0, 1.0, 0.2)), (15.0, (-3.0, 1.0, 1.0)),
+                             (20.0, (-3.0, 1.0, 1.0)), (35.0, (3.0, 1.0, 1.0)), (45.0, (3.0, 1.0, 1.0)),
+                             (50.0, (3.0, 1.0, -0.2)))),)),
+}
+
+
+def scenario_names() -> list[str]:
+    return list(SCENARIOS)
+
+
+def get_scenario(name: str) -> Scenario:
+    if name not in SCENARIOS:
+        raise ValueError(f"unknown scenario {name!r}; available: {scenario_names()}")
+    return SCENARIOS[name]
