@@ -119,14 +119,19 @@ def _rms(x) -> float:
 
 
 def _window(run: ScenarioRun, t0: float, t1: float = np.inf) -> np.ndarray:
-    return (run.time >= t0) & (run.time < t1)
+    """Samples with t0 <= t < t1; a run too short for the window uses its last sample."""
+    w = (run.time >= t0) & (run.time < t1)
+    if not w.any():
+        w = np.zeros(run.time.size, bool)
+        w[-1] = True
+    return w
 
 
 def _vehicle_stats(run: ScenarioRun, i: int, t0: float = 0.0, t1: float = np.inf) -> dict:
     h, w = run.h, _window(run, t0, t1)
     iw = h["induced_wind_ned"][w, i]
     return {
-        "window_s": [t0, float(min(t1, run.time[-1] + run.scenario.dt))],
+        "window_s": [float(run.time[w][0]), float(run.time[w][-1] + run.scenario.dt)],
         "along_track_error_m": {"rms": _rms(h["along_track"][w, i]), "max_abs": float(np.max(np.abs(h["along_track"][w, i]))),
                                 "mean": float(np.mean(h["along_track"][w, i]))},
         "off_track_error_m": {"rms": _rms(h["off_track"][w, i]), "max_abs": float(np.max(np.abs(h["off_track"][w, i]))),
