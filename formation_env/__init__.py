@@ -1,7 +1,36 @@
 """formation-env: close-formation UAV flight simulation for reinforcement learning.
 
 Layers (imports point down only): ``geometry`` -> ``wake`` (ELL) -> ``aircraft`` (Aerosonde
-6-DOF) -> ``sim`` -> ``envs``. See README.md.
+6-DOF) -> ``sim`` -> ``envs``. ``import formation_env`` registers the Gymnasium ids
+(``formation_env/FormationKeeping-v0`` ...); ``formation_env.parallel_env(...)`` and
+``formation_env.env(...)`` give the PettingZoo environments. See README.md.
 """
 
 __version__ = "0.1.0"
+
+
+def parallel_env(scenario: str = "formation_keeping", render_mode=None, **options):
+    """PettingZoo ParallelEnv (see :func:`formation_env.envs.parallel_env`)."""
+    from .envs import parallel_env as _parallel_env
+
+    return _parallel_env(scenario, render_mode=render_mode, **options)
+
+
+def env(scenario: str = "formation_keeping", render_mode=None, **options):
+    """PettingZoo AEC env (see :func:`formation_env.envs.env`)."""
+    from .envs import env as _env
+
+    return _env(scenario, render_mode=render_mode, **options)
+
+
+def _register() -> None:
+    try:
+        import gymnasium  # noqa: F401
+    except ModuleNotFoundError:  # the physics layers work without the RL stack
+        return
+    from .envs.gym_env import register_envs
+
+    register_envs()
+
+
+_register()

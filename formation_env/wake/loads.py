@@ -13,6 +13,7 @@ about the vehicle's body origin, in body axes. Lift, drag and side force are in 
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import lru_cache
 
 import numpy as np
 
@@ -94,12 +95,19 @@ def vehicle_loads(model: WakeModel, state: FormationState, solution: WakeSolutio
     )
 
 
+@lru_cache(maxsize=64)
+def _alone_model(vehicle, core, eval_points, rotational, kinematic_viscosity, viscous_aic) -> WakeModel:
+    # Vehicles are frozen (hashable) dataclasses: the isolated model of each is built once.
+    return WakeModel([vehicle], core=core, eval_points=eval_points, rotational=rotational,
+                     kinematic_viscosity=kinematic_viscosity, viscous_aic=viscous_aic)
+
+
 def isolated_loads(model: WakeModel, state: FormationState, air_density: float = AIR_DENSITY_SL) -> VehicleLoads:
     """Loads each vehicle would have flying alone with the same pose and air data."""
     per_vehicle = []
     for v, vehicle in enumerate(model.vehicles):
-        alone = WakeModel([vehicle], core=model.core, eval_points=model.eval_points, rotational=model.rotational,
-                          kinematic_viscosity=model.kinematic_viscosity, viscous_aic=model.viscous_aic)
+        alone = _alone_model(vehicle, model.core, model.eval_points, model.rotational, model.kinematic_viscosity,
+                             model.viscous_aic)
         sv = FormationState(state.position_ned[:, v:v + 1], state.euler_rad[:, v:v + 1], state.airspeed_mps[:, v:v + 1],
                             state.alpha_rad[:, v:v + 1], state.beta_rad[:, v:v + 1])
         per_vehicle.append(vehicle_loads(alone, sv, alone.evaluate(sv), air_density))

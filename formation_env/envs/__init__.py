@@ -1,0 +1,20 @@
+"""Reinforcement-learning environments: PettingZoo parallel/AEC and single-agent Gymnasium."""
+
+from .config import ACTION_MODES, EnvConfig, Randomisation, RewardWeights
+from .gym_env import GYM_IDS, FormationGymEnv, register_envs
+from .parallel import FormationParallelEnv
+
+__all__ = ["ACTION_MODES", "EnvConfig", "Randomisation", "RewardWeights", "FormationParallelEnv", "FormationGymEnv",
+           "GYM_IDS", "register_envs", "parallel_env", "env"]
+
+
+def parallel_env(scenario: str = "formation_keeping", render_mode: str | None = None, **options) -> FormationParallelEnv:
+    """The PettingZoo ParallelEnv of ``scenario`` (options: see :class:`EnvConfig`)."""
+    return FormationParallelEnv(render_mode=render_mode, scenario=scenario, **options)
+
+
+def env(scenario: str = "formation_keeping", render_mode: str | None = None, **options):
+    """The PettingZoo AEC version of :func:`parallel_env`."""
+    from pettingzoo.utils.conversions import parallel_to_aec
+
+    return parallel_to_aec(parallel_env(scenario, render_mode=render_mode, **options))

@@ -1,0 +1,136 @@
+"""Environment configuration: frozen dataclasses validated on construction (ValueError names the field)."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field, fields
+
+__all__ = ["ACTION_MODES", "OBS_MODES", "RewardWeights", "Randomisation", "EnvConfig"]
+
+ACTION_MODES = ("surfaces", "residual", "setpoints")
+OBS_MODES = ("flat", "dict")
+
+
+def _finite(owner: str, name: str, value, *, minimum: float | None = None, positive: bool = False) -> float:
+    if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
+        raise ValueError(f"{owner}: {name} must be a finite number, got {value!r}")
+    if positive and value <= 0:
+        raise ValueError(f"{owner}: {name} must be > 0, got {value!r}")
+    if minimum is not None and value < minimum:
+        raise ValueError(f"{owner}: {name} must be >= {minimum}, got {value!r}")
+    return float(value)
+
+
+@dataclass(frozen=True)
+class RewardWeights:
+    """Per-agent reward r = - slot * min(|e| / slot_scale_m, 5)
+                            - effort * |a|^2 / 4 - rate * |a - a_prev|^2 / 4
+                            + benefit * induced-drag saving + progress * (|e_prev| - |e|) / slot_scale_m
+                            - collision * [collision] - crash * [left the envelope or non-finite].
+    e is the agent's position error to its slot (vehicle 0: to its reference path), a its action."""
+
+    slot: float = 1.0
+    slot_scale_m: float = 10.0
+    effort: float = 0.01
+    rate: float = 0.05
+    benefit: float = 0.0
+    progress: float = 0.5
+    collision: float = 50.0
+    crash: float = 50.0
+
+    def __post_init__(self) -> None:
+        for f in fields(self):
+            _finite("RewardWeights", f.name, getattr(self, f.name), minimum=0.0)
+        _finite("RewardWeights", "slot_scale_m", self.slot_scale_m, positive=True)
+
+
+@dataclass(frozen=True)
+class Randomisation:
+    """Per-episode randomisation for learning (all zero: the thesis scenario exactly).
+
+    initial_offset_m: std of each follower's initial position jitter (NED, m).
+    slot_offset_b: std of each slot's offset jitter (spans), applied to the whole schedule.
+    steady_wind_mps: maximum steady horizontal wind speed (uniform in [0, max], random direction).
+    turbulence_sigma_mps: Dryden intensity (m/s, all axes; MIL-F-8785C low-altitude scale lengths).
+    leader_turn_deg, leader_climb_m, leader_speed_mps: amplitude of one random manoeuvre of the
+        reference (heading change, altitude change, speed change), each drawn uniformly in +-amplitude
+        and started at a random time in the first half of the episode.
+    """
+
+    initial_offset_m: float = 0.0
+    slot_offset_b: float = 0.0
+    steady_wind_mps: float = 0.0
+    turbulence_sigma_mps: float = 0.0
+    leader_turn_deg: float = 0.0
+    leader_climb_m: float = 0.0
+    leader_speed_mps: float = 0.0
+
+    def __post_init__(self) -> None:
+        for f in fields(self):
+            _finite("Randomisation", f.name, getattr(self, f.name), minimum=0.0)
+
+    @property
+    def any_manoeuvre(self) -> bool:
+        return self.leader_turn_deg > 0 or self.leader_climb_m > 0 or self.leader_speed_mps > 0
+
+
+@dataclass(frozen=True)
+class EnvConfig:
+    """Options of the formation environments.
+
+    scenario: a name from :func:`formation_env.scenarios.scenario_names`.
+    learning: which UAVs are agents: "all", "followers" (vehicle 0 flies the PID baseline on its
+        path: a scripted leader) or a tuple of vehicle indices.
+    action_mode: "surfaces" | "residual" | "setpoints" (see :mod:`formation_env.envs.actions`).
+    control_hz: agent decision rate; the physics runs at 1 / scenario dt (50 Hz) and the action is
+        held in between. Must divide the physics rate.
+    wake: ELL wake coupling on or off (None: the scenario's default).
+    obs_mode: "flat" (normalised Box, default) or "dict".
+    collision_separation_b: minimum CG separation, spans, below which the episode ends (collision).
+    duration_s: episode length (None: the scenario's).
+    compute_benefit: compute each UAV's induced-drag saving (ELL loads) every control step for the
+        infos (also forced on when the benefit weight is > 0).
+    """
+
+    scenario: str = "formation_keeping"
+    learning: str | tuple = "all"
+    action_mode: str = "surfaces"
+    control_hz: float = 10.0
+    wake: bool | None = None
+    obs_mode: str = "flat"
+    collision_separation_b: float = 0.5
+    duration_s: float | None = None
+    compute_benefit: bool = False
+    reward: RewardWeights = field(default_factory=RewardWeights)
+    randomisation: Randomisation = field(default_factory=Randomisation)
+
+    def __post_init__(self) -> None:
+        from ..scenarios import scenario_names
+
+        if self.scenario not in scenario_names():
+            raise ValueError(f"EnvConfig: unknown scenario {self.scenario!r}; available: {scenario_names()}")
+        if self.action_mode not in ACTION_MODES:
+            raise ValueError(f"EnvConfig: action_mode must be one of {ACTION_MODES}, got {self.action_mode!r}")
+        if self.obs_mode not in OBS_MODES:
+            raise ValueError(f"EnvConfig: obs_mode must be one of {OBS_MODES}, got {self.obs_mode!r}")
+        _finite("EnvConfig", "control_hz", self.control_hz, positive=True)
+        _finite("EnvConfig", "collision_separation_b", self.collision_separation_b, minimum=0.0)
+        if self.duration_s is not None:
+            _finite("EnvConfig", "duration_s", self.duration_s, positive=True)
+        if not (self.wake is None or isinstance(self.wake, bool)):
+            raise ValueError(f"EnvConfig: wake must be True, False or None, got {self.wake!r}")
+        if isinstance(self.learning, str):
+            if self.learning not in ("all", "followers"):
+                raise ValueError(f"EnvConfig: learning must be 'all', 'followers' or a tuple of indices, got {self.learning!r}")
+        else:
+            try:
+                idx = tuple(int(i) for i in self.learning)
+            except (TypeError, ValueError):
+                raise ValueError(f"EnvConfig: learning must be 'all', 'followers' or a tuple of indices, got {self.learning!r}") from None
+            if not idx or len(set(idx)) != len(idx):
+                raise ValueError(f"EnvConfig: learning indices must be non-empty and unique, got {self.learning!r}")
+            object.__setattr__(self, "learning", idx)
+        if not isinstance(self.reward, RewardWeights):
+            raise ValueError("EnvConfig: reward must be a RewardWeights")
+        if not isinstance(self.randomisation, Randomisation):
+            raise ValueError("EnvConfig: randomisation must be a Randomisation")

@@ -1,0 +1,255 @@
+"""The episode engine behind the environments: B formations flying a scenario, each UAV either
+flown by the PID baseline or commanded by an agent, on the formation simulator.
+
+Batched over formations (arrays (B, V, ...)); the PettingZoo/Gymnasium envs use B = 1, the vector
+envs B > 1. No RL concepts beyond "this vehicle's command comes from outside".
+
+One physics step follows exactly the order of the scenario runner (agents.run), so that a
+formation flown entirely by the PID baseline gives the runner's numbers bit for bit:
+observation -> demands (reference for vehicle 0, slot behind vehicle 0 for the others) ->
+PID -> agent override -> simulator step (ELL wake -> RK4) -> envelope status.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..aircraft import trim
+from ..aircraft.state import N_STATES, POS
+from ..atmosphere.dryden import DrydenConfig, DrydenTurbulence, aircraft_seeds
+from ..atmosphere.wind import WindInput
+from ..scenarios import Scenario, get_scenario
+from ..sim import FormationSimulator, WakeConfig
+from .config import EnvConfig
+
+__all__ = ["FormationEpisode", "ActionTarget"]
+
+# Leader manoeuvre rates (reference path): turn 3 deg/s, climb 1.5 m/s, speed change 0.5 m/s^2.
+_TURN_RATE = math.radians(3.0)
+_CLIMB_RATE = 1.5
+_ACCEL = 0.5
+
+
+@dataclass
+class ActionTarget:
+    """How agent actions enter: ``mode`` and per-vehicle (B, V, 4) normalised actions in [-1, 1]
+    with ``mask`` (V,) True where the vehicle is agent-controlled."""
+
+    mode: str
+    actions: np.ndarray
+    mask: np.ndarray
+
+
+class FormationEpisode:
+    """B formations of the scenario's V UAVs. ``reset(seeds)`` then ``physics_step(target)``."""
+
+    def __init__(self, config: EnvConfig, batch_size: int = 1) -> None:
+        from agents.fcs import PIDFlightControl  # the baseline lives in agents/ (imported lazily)
+        from agents.observation import fcs_observation, slot_demand, track_frame_offset_to_ned
+
+        if not isinstance(config, EnvConfig):
+            raise ValueError(f"FormationEpisode: config must be an EnvConfig, got {type(config).__name__}")
+        self.config = config
+        self.scenario: Scenario = get_scenario(config.scenario)
+        sc = self.scenario
+        self.batch_size = int(batch_size)
+        self.n_vehicles = sc.n_vehicles
+        self.dt = sc.dt
+        self.duration_s = sc.duration_s if config.duration_s is None else config.duration_s
+        self.n_steps = int(round(self.duration_s / self.dt))
+        self.wake = sc.wake_default if config.wake is None else config.wake
+        self.trim = trim(sc.airspeed_mps, sc.altitude_m)
+        self.fcs = PIDFlightControl.from_trim(self.trim, dt=sc.dt)
+        self.surface_limit_rad = float(self.fcs.config.surface_limit_rad)
+        self.throttle_limits = tuple(float(x) for x in self.fcs.config.throttle_limits)
+        self._fcs_observation, self._slot_demand, self._track_to_ned = fcs_observation, slot_demand, track_frame_offset_to_ned
+        self.sim = FormationSimulator(self.n_vehicles, self.batch_size, dt=sc.dt, wake=WakeConfig(enabled=self.wake))
+        b, v = self.batch_size, self.n_vehicles
+        self.state = np.zeros((b, v, N_STATES))
+        self.cstate = np.zeros((b * v, self.fcs.initial_state(1).shape[1]))
+        self.step_count = np.zeros(b, dtype=np.int64)
+        self.induced = np.zeros((b, v, 3))
+        self.omega = np.zeros((b, v, 3))
+        self.status = np.zeros((b, v), dtype=np.int64)
+        self.commands = np.zeros((b, v, 4))
+        self.position_demand = np.zeros((b, v, 3))
+        self.velocity_demand = np.zeros((b, v, 3))
+        self.slot_jitter = np.zeros((b, v, 3))  # m, track frame, per follower
+        self.steady_wind = np.zeros((b, 3))
+        self.manoeuvre = np.zeros((b, 4))  # start time s, heading change rad, altitude change m, speed change m/s
+        self.ref_pos = np.zeros((b, 3))
+        self.ref_vel = np.zeros((b, 3))
+        self.turbulence: list[DrydenTurbulence | None] = [None] * b
+        self.rngs = [np.random.default_rng(0) for _ in range(b)]
+
+    # ------------------------------------------------------------------ reset
+    def reset(self, indices=None, seeds=None) -> None:
+        """Start the formations ``indices`` (default all) anew; ``seeds`` one int (or None) each."""
+        idx = np.arange(self.batch_size) if indices is None else np.atleast_1d(np.asarray(indices, dtype=np.int64))
+        seeds = [None] * len(idx) if seeds is None else list(seeds)
+        if len(seeds) != len(idx):
+            raise ValueError(f"reset: {len(seeds)} seeds for {len(idx)} formations")
+        sc, rnd, v = self.scenario, self.config.randomisation, self.n_vehicles
+        for i, seed in zip(idx, seeds):
+            rng = np.random.default_rng(seed)
+            self.rngs[i] = rng
+            state = np.repeat(self.trim.state, v, axis=0)
+            state[:, POS] = sc.start_position_ned()
+            jitter = np.zeros((v, 3))
+            if v > 1 and rnd.slot_offset_b > 0:
+                jitter[1:] = rng.normal(0.0, rnd.slot_offset_b * 2.9, (v - 1, 3))
+            self.slot_jitter[i] = jitter
+            state[1:, POS] += self._track_to_ned(jitter[1:], 0.0)
+            if v > 1 and rnd.initial_offset_m > 0:
+                state[1:, POS] += rng.normal(0.0, rnd.initial_offset_m, (v - 1, 3))
+            self.state[i] = state
+            if rnd.steady_wind_mps > 0:
+                speed, direction = rng.uniform(0.0, rnd.steady_wind_mps), rng.uniform(-math.pi, math.pi)
+                self.steady_wind[i] = [speed * math.cos(direction), speed * math.sin(direction), 0.0]
+            else:
+                self.steady_wind[i] = 0.0
+            if rnd.any_manoeuvre:
+                self.manoeuvre[i] = [rng.uniform(0.0, 0.5 * self.duration_s),
+                                     math.radians(rng.uniform(-rnd.leader_turn_deg, rnd.leader_turn_deg)),
+                                     rng.uniform(-rnd.leader_climb_m, rnd.leader_climb_m),
+                                     rng.uniform(-rnd.leader_speed_mps, rnd.leader_speed_mps)]
+            p0, v0 = sc.reference(0.0)
+            self.ref_pos[i], self.ref_vel[i] = p0, v0
+            if rnd.turbulence_sigma_mps > 0:
+                cfg = DrydenConfig.low_altitude(sc.altitude_m, 1.0, sc.airspeed_mps, sc.dt)
+                cfg = DrydenConfig((rnd.turbulence_sigma_mps,) * 3, cfg.length_scale_m, sc.airspeed_mps, sc.dt)
+                self.turbulence[i] = DrydenTurbulence(cfg, aircraft_seeds(int(rng.integers(2**63 - 1)), v))
+            else:
+                self.turbulence[i] = None
+            self.cstate[i * v:(i + 1) * v] = self.fcs.initial_state(v)
+            self.step_count[i] = 0
+            self.induced[i] = 0.0
+            self.omega[i] = 0.0
+            self.status[i] = 0
+            self.commands[i] = self.trim.controls[0, :4]
+        self.sim.reset_wake_hold()
+        self._update_demands(self._velocity_ned())
+
+    # ------------------------------------------------------------------ pieces
+    @property
+    def time_s(self) -> np.ndarray:
+        return self.step_count * self.dt
+
+    def ambient_wind(self) -> np.ndarray:
+        """(B, V, 3) ambient wind (scenario gusts + steady wind), NED m/s."""
+        b, v = self.batch_size, self.n_vehicles
+        w = np.empty((b, v, 3))
+        for i in range(b):
+            w[i] = self.scenario.ambient_wind_ned(float(self.time_s[i])) + self.steady_wind[i]
+        return w
+
+    def turbulence_body(self) -> np.ndarray:
+        out = np.zeros((self.batch_size, self.n_vehicles, 3))
+        for i, turb in enumerate(self.turbulence):
+            if turb is not None:
+                out[i] = turb.velocity_body
+        return out
+
+    def _velocity_ned(self) -> np.ndarray:
+        from ..frames import dcm_body_to_ned_from_quaternion
+
+        r = dcm_body_to_ned_from_quaternion(self.state[..., 6:10])
+        return np.einsum("bvij,bvj->bvi", r, self.state[..., 0:3])
+
+    def _reference(self, i: int, t: float) -> tuple[np.ndarray, np.ndarray]:
+        if not self.config.randomisation.any_manoeuvre:
+            return self.scenario.reference(t)
+        # Manoeuvring reference: integrated by the engine (explicit Euler on the physics grid).
+        t0, dpsi, dh, dv = self.manoeuvre[i]
+        tau = max(0.0, t - t0)
+        psi = math.copysign(min(abs(dpsi), _TURN_RATE * tau), dpsi)
+        climb = math.copysign(_CLIMB_RATE, dh) if 0.0 < tau < abs(dh) / _CLIMB_RATE else 0.0
+        speed = self.scenario.airspeed_mps + math.copysign(min(abs(dv), _ACCEL * tau), dv)
+        return self.ref_pos[i].copy(), np.array([speed * math.cos(psi), speed * math.sin(psi), -climb])
+
+    def position_demand_now(self) -> np.ndarray:
+        """(B, V, 3) demanded positions at the current time and state (the stored demands are those
+        of the last physics step's start)."""
+        self._update_demands(self._velocity_ned())
+        return self.position_demand
+
+    def _update_demands(self, vel_ned: np.ndarray) -> None:
+        for i in range(self.batch_size):
+            t = float(self.time_s[i])
+            self.position_demand[i, 0], self.velocity_demand[i, 0] = self._reference(i, t)
+            for j, slot in enumerate(self.scenario.slots):
+                off, rate = slot.offset_and_rate(t)
+                p, w = self._slot_demand(self.state[i, 0, 10:13], vel_ned[i, 0], off + self.slot_jitter[i, j + 1], rate)
+                self.position_demand[i, j + 1], self.velocity_demand[i, j + 1] = p, w
+
+    # ------------------------------------------------------------------ step
+    def physics_step(self, target: ActionTarget | None = None) -> None:
+        """Advance every formation by one physics step (dt) with the agents' actions held."""
+        b, v = self.batch_size, self.n_vehicles
+        amb = self.ambient_wind()
+        turb = self.turbulence_body()
+        flat = self.state.reshape(b * v, N_STATES)
+        wind = WindInput(wind_ned=(amb + self.induced).reshape(b * v, 3), turbulence_body=turb.reshape(b * v, 3))
+        obs0 = self._fcs_observation(flat, np.zeros(3), np.zeros(3), wind)
+        self._update_demands(obs0["velocity_ned"].reshape(b, v, 3))
+        pd, vd = self.position_demand.copy(), self.velocity_demand.copy()
+        if target is not None and target.mode == "setpoints":
+            pd, vd = self._apply_setpoints(target, pd, vd)
+        obs = dict(obs0, position_demand_ned=pd.reshape(b * v, 3), velocity_demand_ned=vd.reshape(b * v, 3))
+        cmd, self.cstate = self.fcs.act(obs, self.cstate)
+        cmd = cmd.reshape(b, v, 4)
+        if target is not None and target.mode in ("surfaces", "residual"):
+            cmd = self._apply_commands(target, cmd)
+        self.commands = cmd
+        res = self.sim.step(self.state, cmd, amb, turb)
+        self.state, self.induced, self.omega, self.status = res.state, res.induced_wind_ned, res.induced_omega_body, res.status
+        self.circulation = res.circulation
+        self.step_count += 1
+        for i, t in enumerate(self.turbulence):
+            if t is not None:
+                t.step()
+        if self.config.randomisation.any_manoeuvre:
+            for i in range(b):
+                _, vel = self._reference(i, float(self.time_s[i] - self.dt))
+                self.ref_pos[i] = self.ref_pos[i] + self.dt * vel
+
+    def _limits(self) -> tuple[np.ndarray, np.ndarray]:
+        lim = self.surface_limit_rad
+        return np.array([-lim, -lim, -lim, self.throttle_limits[0]]), np.array([lim, lim, lim, self.throttle_limits[1]])
+
+    def _apply_commands(self, target: ActionTarget, cmd: np.ndarray) -> np.ndarray:
+        lo, hi = self._limits()
+        a = target.actions
+        m = target.mask
+        out = cmd.copy()
+        if target.mode == "surfaces":
+            # a = 0 is the trim command; +-1 spans the surface limit (and half the throttle range) about it
+            mapped = np.clip(self.trim.controls[0, :4] + a * SURFACE_SCALE(self.surface_limit_rad), lo, hi)
+            out[:, m] = mapped[:, m]
+        else:  # residual: added to the PID command
+            out[:, m] = np.clip(cmd[:, m] + a[:, m] * RESIDUAL_SCALE, lo, hi)
+        return out
+
+    def _apply_setpoints(self, target: ActionTarget, pd: np.ndarray, vd: np.ndarray):
+        a, m = target.actions, target.mask
+        chi = np.arctan2(vd[..., 1], vd[..., 0])
+        dp = self._track_to_ned(a[..., :3] * SETPOINT_POSITION_SCALE_M, chi)
+        speed = np.linalg.norm(vd, axis=-1, keepdims=True)
+        dv = vd / np.maximum(speed, 1e-9) * (a[..., 3:4] * SETPOINT_SPEED_SCALE_MPS)
+        pd, vd = pd.copy(), vd.copy()
+        pd[:, m] += dp[:, m]
+        vd[:, m] += dv[:, m]
+        return pd, vd
+
+
+# Action scaling (documented in formation_env.envs.actions)
+def SURFACE_SCALE(limit_rad: float) -> np.ndarray:  # noqa: N802 - a constant that depends on the FCS limit
+    return np.array([limit_rad, limit_rad, limit_rad, 0.5])
+
+
+RESIDUAL_SCALE = np.array([0.1, 0.1, 0.1, 0.2])  # rad, rad, rad, throttle fraction per unit action
+SETPOINT_POSITION_SCALE_M = 5.0  # m per unit action, slot frame (along, starboard, down)
+SETPOINT_SPEED_SCALE_MPS = 2.0  # m/s per unit action along the demanded track

@@ -1,0 +1,41 @@
+"""Per-agent rewards and episode-ending events (see :class:`formation_env.envs.config.RewardWeights`)."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .config import RewardWeights
+
+__all__ = ["slot_error_m", "min_separation_m", "reward_terms"]
+
+
+def slot_error_m(state: np.ndarray, position_demand: np.ndarray) -> np.ndarray:
+    """(B, V) distance of each UAV's CG from its slot (demanded position), m."""
+    return np.linalg.norm(state[..., 10:13] - position_demand, axis=-1)
+
+
+def min_separation_m(state: np.ndarray) -> np.ndarray:
+    """(B, V) distance from each UAV to its nearest neighbour (inf when flying alone), m."""
+    pos = state[..., 10:13]
+    d = np.linalg.norm(pos[:, :, None, :] - pos[:, None, :, :], axis=-1)
+    v = pos.shape[1]
+    d[:, np.arange(v), np.arange(v)] = np.inf
+    return d.min(axis=-1)
+
+
+def reward_terms(w: RewardWeights, error, previous_error, action, previous_action, saving, collided, crashed) -> dict:
+    """Reward components (B, V) and their sum under ``"total"``. Non-finite inputs count as a crash."""
+    with np.errstate(all="ignore"):
+        err = np.nan_to_num(error, nan=1e6, posinf=1e6)
+        prev = np.nan_to_num(previous_error, nan=1e6, posinf=1e6)
+        terms = {
+            "slot": -w.slot * np.minimum(err / w.slot_scale_m, 5.0),
+            "effort": -w.effort * np.sum(action * action, axis=-1) / 4.0,
+            "rate": -w.rate * np.sum((action - previous_action) ** 2, axis=-1) / 4.0,
+            "benefit": w.benefit * np.nan_to_num(saving),
+            "progress": w.progress * np.clip((prev - err) / w.slot_scale_m, -1.0, 1.0),
+            "collision": -w.collision * collided.astype(float),
+            "crash": -w.crash * crashed.astype(float),
+        }
+    terms["total"] = sum(terms.values())
+    return terms
