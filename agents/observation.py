@@ -95,16 +95,19 @@ def track_frame_offset_to_ned(offset_track, track_angle_rad) -> np.ndarray:
     return np.stack([c * off[..., 0] - s * off[..., 1], s * off[..., 0] + c * off[..., 1], off[..., 2]], axis=-1)
 
 
-def slot_demand(leader_position_ned, leader_velocity_ned, slot_offset_track, slot_rate_track=None):
+def slot_demand(leader_position_ned, leader_velocity_ned, slot_offset_track, slot_rate_track=None,
+                track_angle_rad=None):
     """Virtual-leader demands for followers: ``(position_demand_ned, velocity_demand_ned)``.
 
     The slot offset (x forward, y starboard, z down, m) is expressed along the leader's ground
     track ``atan2(v_east, v_north)``; the demanded velocity is the leader's plus the slot's own
-    rate (for a moving slot, e.g. reconfiguration). All arrays (..., 3).
+    rate (for a moving slot, e.g. reconfiguration). All arrays (..., 3). ``track_angle_rad``
+    overrides the track the slot is expressed along (e.g. the leader's *demanded* track, which
+    does not swing with the leader's lateral oscillations; the scenario runner's default).
     """
     lp = np.asarray(leader_position_ned, dtype=float)
     lv = np.asarray(leader_velocity_ned, dtype=float)
-    chi = np.arctan2(lv[..., 1], lv[..., 0])
+    chi = np.arctan2(lv[..., 1], lv[..., 0]) if track_angle_rad is None else np.asarray(track_angle_rad, float)
     pos = lp + track_frame_offset_to_ned(slot_offset_track, chi)
     vel = lv.copy()
     if slot_rate_track is not None:

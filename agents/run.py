@@ -53,7 +53,8 @@ def _demands(sc: Scenario, t: float, state: np.ndarray, vel_ned: np.ndarray):
     pd[0], vd[0] = sc.reference(t)
     for i, slot in enumerate(sc.slots):
         off, rate = slot.offset_and_rate(t)
-        p, w = slot_demand(state[0, 10:13], vel_ned[0], off, rate)
+        p, w = slot_demand(state[0, 10:13], vel_ned[0], off, rate,
+                           track_angle_rad=np.arctan2(vd[0, 1], vd[0, 0]) if sc.slot_frame == "leader_demand" else None)
         pd[i + 1], vd[i + 1] = p, w
     return pd, vd
 

@@ -74,6 +74,9 @@ class Scenario:
     altitude_m: float = 1000.0
     dt: float = 0.02
     wake_default: bool = True
+    # the track the slot offsets are expressed along: the leader's demanded track
+    # ("leader_demand", default) or its measured ground track ("leader_track")
+    slot_frame: str = "leader_demand"
     notes: dict = field(default_factory=dict)
 
     def __post_init__(self) -> None:
@@ -83,6 +86,8 @@ class Scenario:
             v = getattr(self, fname)
             if not (math.isfinite(v) and v > 0):
                 raise ValueError(f"Scenario.{fname} must be finite and > 0, got {v!r}")
+        if self.slot_frame not in ("leader_demand", "leader_track"):
+            raise ValueError(f"Scenario.slot_frame must be 'leader_demand' or 'leader_track', got {self.slot_frame!r}")
         if not all(isinstance(s, SlotSchedule) for s in self.slots):
             raise ValueError("Scenario.slots must be SlotSchedule instances")
         if not all(isinstance(g, TransientGust) for g in self.gusts):
