@@ -34,7 +34,7 @@ def test_modes_cli_json(capsys):
 
 
 def test_verify_sections_pass_and_serialise():
-    assert set(va.SECTIONS) == {"trim_a5", "modes_open"}
+    assert set(va.SECTIONS) == {"trim_a5", "modes_open", "modes_closed"}
     for name, fn in va.SECTIONS.items():
         d = fn()
         json.dumps(d)
