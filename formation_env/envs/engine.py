@@ -180,9 +180,12 @@ class FormationEpisode:
         for i in range(self.batch_size):
             t = float(self.time_s[i])
             self.position_demand[i, 0], self.velocity_demand[i, 0] = self._reference(i, t)
+            vd0 = self.velocity_demand[i, 0]
+            chi = np.arctan2(vd0[1], vd0[0]) if self.scenario.slot_frame == "leader_demand" else None
             for j, slot in enumerate(self.scenario.slots):
                 off, rate = slot.offset_and_rate(t)
-                p, w = self._slot_demand(self.state[i, 0, 10:13], vel_ned[i, 0], off + self.slot_jitter[i, j + 1], rate)
+                p, w = self._slot_demand(self.state[i, 0, 10:13], vel_ned[i, 0], off + self.slot_jitter[i, j + 1], rate,
+                                         track_angle_rad=chi)
                 self.position_demand[i, j + 1], self.velocity_demand[i, j + 1] = p, w
 
     # ------------------------------------------------------------------ step

@@ -112,8 +112,10 @@ class FormationParallelEnv(ParallelEnv):
 
     # ---------------------------------------------------------------- API
     def reset(self, seed: int | None = None, options: dict | None = None):
-        if options:
-            raise ValueError(f"reset options are not supported (got {sorted(options)}); configure the env instead")
+        # ``options`` is accepted for API compatibility (PettingZoo's own test passes some); the env is
+        # configured at construction, so nothing in it is used.
+        if options is not None and not isinstance(options, dict):
+            raise ValueError(f"options must be a dict or None, got {type(options).__name__}")
         if seed is None:
             seed = int(self._entropy.spawn(1)[0].generate_state(1)[0])
         elif isinstance(seed, bool) or not isinstance(seed, (int, np.integer)):

@@ -1,0 +1,126 @@
+"""Determinism, the PID baseline through the env, bad input, and a fuzz test."""
+
+import numpy as np
+import pytest
+
+import formation_env
+from agents.run import run_scenario
+from formation_env.envs import EnvConfig, Randomisation
+from formation_env.scenarios import scenario_names
+
+RANDOM = Randomisation(initial_offset_m=2.0, slot_offset_b=0.1, steady_wind_mps=4.0, turbulence_sigma_mps=1.0,
+                       leader_turn_deg=20.0, leader_climb_m=10.0, leader_speed_mps=2.0)
+
+
+def _rollout(scenario, seed, n_steps, mode):
+    env = formation_env.parallel_env(scenario, action_mode=mode, randomisation=RANDOM)
+    rng = np.random.default_rng(seed)
+    obs, _ = env.reset(seed=seed)
+    trace = []
+    episode = 0
+    for _ in range(n_steps):
+        if not env.agents:
+            episode += 1
+            obs, _ = env.reset(seed=seed + episode)
+        act = {a: rng.uniform(-1, 1, 4).astype(np.float32) for a in env.agents}
+        obs, rew, term, trunc, info = env.step(act)
+        trace.append((np.concatenate([obs[a] for a in sorted(obs)]), np.array([rew[a] for a in sorted(rew)]),
+                      env.engine.state.copy()))
+    return trace
+
+
+@pytest.mark.parametrize("scenario", scenario_names())
+def test_seeded_1000_step_replay_is_bit_exact(scenario):
+    mode = "residual" if scenario != "tracking" else "setpoints"
+    a = _rollout(scenario, 11, 1000, mode)
+    b = _rollout(scenario, 11, 1000, mode)
+    for (oa, ra, sa), (ob, rb, sb) in zip(a, b):
+        assert np.array_equal(oa, ob) and np.array_equal(ra, rb) and np.array_equal(sa, sb)
+    c = _rollout(scenario, 12, 50, mode)
+    assert not all(np.array_equal(x[2], y[2]) for x, y in zip(a[:50], c))  # another seed differs
+
+
+@pytest.mark.parametrize("scenario", ["formation_keeping", "reconfiguration"])
+def test_pid_through_the_env_reproduces_the_runner(scenario):
+    """Zero residual = the PID baseline: the env's trajectory equals the scenario runner's exactly."""
+    env = formation_env.parallel_env(scenario, action_mode="residual")
+    env.reset(seed=0)
+    run = run_scenario(scenario)
+    k = 0
+    while env.agents:
+        env.step({a: np.zeros(4, np.float32) for a in env.agents})
+        k += env.substeps
+        if k < run.time.size:
+            assert np.array_equal(env.engine.state[0, :, 10:13], run.h["position_ned"][k]), k
+            assert np.array_equal(env.engine.induced[0], run.h["induced_wind_ned"][k - 1]), k
+    assert k >= run.time.size - 1
+
+
+def test_bad_input_raises_clear_errors():
+    env = formation_env.parallel_env("formation_keeping")
+    env.reset(seed=0)
+    good = {a: np.zeros(4, np.float32) for a in env.agents}
+    with pytest.raises(ValueError, match="shape"):
+        env.step({**good, "uav_1": np.zeros(3)})
+    with pytest.raises(ValueError, match="NaN or inf"):
+        env.step({**good, "uav_1": np.array([0, np.nan, 0, 0])})
+    with pytest.raises(ValueError, match="NaN or inf"):
+        env.step({**good, "uav_0": np.array([0, 0, np.inf, 0])})
+    with pytest.raises(ValueError, match="uav_7"):
+        env.step({**good, "uav_7": np.zeros(4)})
+    with pytest.raises(ValueError, match="missing"):
+        env.step({"uav_0": np.zeros(4)})
+    with pytest.raises(ValueError, match="unknown scenario"):
+        formation_env.parallel_env("barrel_roll")
+    with pytest.raises(ValueError, match="action_mode"):
+        formation_env.parallel_env("formation_keeping", action_mode="joystick")
+    with pytest.raises(ValueError, match="wingspan"):
+        formation_env.parallel_env("formation_keeping", wingspan=3)
+    with pytest.raises(ValueError, match="control_hz"):
+        formation_env.parallel_env("formation_keeping", control_hz=7.0)
+    with pytest.raises(ValueError, match="turbulence_sigma_mps"):
+        Randomisation(turbulence_sigma_mps=-1.0)
+    with pytest.raises(ValueError, match="learning"):
+        EnvConfig(learning=(5,)) and formation_env.parallel_env("formation_keeping", learning=(5,))
+    with pytest.raises(ValueError, match="followers"):
+        formation_env.parallel_env("gust", learning="followers")
+
+
+def test_fuzz_random_and_extreme_actions_never_emit_non_finite():
+    rng = np.random.default_rng(5)
+    for episode, mode in enumerate(["surfaces", "surfaces", "residual", "setpoints"] * 2):
+        env = formation_env.parallel_env("reconfiguration", action_mode=mode, randomisation=RANDOM, duration_s=30.0)
+        obs, _ = env.reset(seed=episode)
+        while env.agents:
+            kind = rng.integers(3)
+            act = {a: (rng.choice([-1.0, 1.0], 4) if kind == 0 else rng.uniform(-1, 1, 4) * (5.0 if kind == 1 else 1.0))
+                   for a in env.agents}
+            obs, rew, term, trunc, info = env.step(act)
+            for a in obs:
+                assert np.all(np.isfinite(obs[a])) and env.observation_space(a).contains(obs[a])
+                assert np.isfinite(rew[a])
+        assert all(term.values()) or all(trunc.values())
+
+
+def test_collision_terminates_every_agent_with_the_penalty():
+    env = formation_env.parallel_env("formation_keeping", action_mode="residual")
+    env.reset(seed=0)
+    # Put the follower 1 m behind the leader's CG (less than 0.5 span = 1.45 m).
+    env.engine.state[0, 1, 10:13] = env.engine.state[0, 0, 10:13] + np.array([-1.0, 0.0, 0.0])
+    obs, rew, term, trunc, info = env.step({a: np.zeros(4, np.float32) for a in env.agents})
+    assert all(term.values()) and not any(trunc.values()) and env.agents == []
+    for a in ("uav_0", "uav_1"):
+        assert info[a]["collision"] and info[a]["reward_terms"]["collision"] == -50.0
+        assert info[a]["min_separation_m"] < 1.45
+        assert np.all(np.isfinite(obs[a]))
+
+
+def test_truncation_at_the_time_limit():
+    env = formation_env.parallel_env("formation_keeping", action_mode="residual", duration_s=3.0)
+    env.reset(seed=0)
+    n = 0
+    while env.agents:
+        obs, rew, term, trunc, info = env.step({a: np.zeros(4, np.float32) for a in env.agents})
+        n += 1
+    assert n == 30 and all(trunc.values()) and not any(term.values())
+    assert info["uav_1"]["time_s"] == pytest.approx(3.0)
