@@ -194,6 +194,11 @@ class FormationEpisode:
         b, v = self.batch_size, self.n_vehicles
         amb = self.ambient_wind()
         turb = self.turbulence_body()
+        if target is not None and target.mode == "surfaces" and target.mask.all():
+            # Every UAV is commanded directly: the PID baseline (and its observation) is not needed.
+            cmd = self._apply_commands(target, self.commands)
+            self._advance(cmd, amb, turb)
+            return
         flat = self.state.reshape(b * v, N_STATES)
         wind = WindInput(wind_ned=(amb + self.induced).reshape(b * v, 3), turbulence_body=turb.reshape(b * v, 3))
         obs0 = self._fcs_observation(flat, np.zeros(3), np.zeros(3), wind)
@@ -206,6 +211,10 @@ class FormationEpisode:
         cmd = cmd.reshape(b, v, 4)
         if target is not None and target.mode in ("surfaces", "residual"):
             cmd = self._apply_commands(target, cmd)
+        self._advance(cmd, amb, turb)
+
+    def _advance(self, cmd: np.ndarray, amb: np.ndarray, turb: np.ndarray) -> None:
+        b = self.batch_size
         self.commands = cmd
         res = self.sim.step(self.state, cmd, amb, turb)
         self.state, self.induced, self.omega, self.status = res.state, res.induced_wind_ned, res.induced_omega_body, res.status

@@ -26,11 +26,17 @@ import numpy as np
 
 from ..aircraft import AEROSONDE, DEFAULT_OPTIONS, AerosondeParams, ModelOptions, check_envelope, step
 from ..aircraft.envelope import DEFAULT_LIMITS, EnvelopeLimits
+from ..aircraft.kernels import pack as pack_aircraft
 from ..aircraft.state import N_STATES, POS, QUAT
 from ..atmosphere.wind import WindInput
 from ..frames import dcm_body_to_ned_from_quaternion, euler_from_quaternion
 from ..geometry import Vehicle, aerosonde
 from ..wake import FormationState, WakeModel
+from ..wake.kernels import CORE_NONE
+from .kernels import pack_limits, step_batch_parallel, step_batch_serial
+
+BACKENDS = ("numba", "numpy")
+_PARALLEL_MIN_BATCH = 16  # below this many formations, thread start-up costs more than it saves
 
 __all__ = ["WakeConfig", "FormationSimulator", "ell_state_from_aircraft", "StepResult"]
 
@@ -96,13 +102,16 @@ class FormationSimulator:
 
     def __init__(self, n_vehicles: int, batch_size: int = 1, *, dt: float = 0.02, wake: WakeConfig = WakeConfig(),
                  params: AerosondeParams = AEROSONDE, options: ModelOptions = DEFAULT_OPTIONS,
-                 limits: EnvelopeLimits = DEFAULT_LIMITS) -> None:
+                 limits: EnvelopeLimits = DEFAULT_LIMITS, backend: str = "numba") -> None:
         if not isinstance(n_vehicles, int) or n_vehicles < 1:
             raise ValueError(f"FormationSimulator: n_vehicles must be an integer >= 1, got {n_vehicles!r}")
         if not isinstance(batch_size, int) or batch_size < 1:
             raise ValueError(f"FormationSimulator: batch_size must be an integer >= 1, got {batch_size!r}")
         if not (np.isfinite(dt) and dt > 0):
             raise ValueError(f"FormationSimulator: dt must be finite and > 0, got {dt!r}")
+        if backend not in BACKENDS:
+            raise ValueError(f"FormationSimulator: backend must be one of {BACKENDS}, got {backend!r}")
+        self.backend = backend
         self.n_vehicles, self.batch_size, self.dt = n_vehicles, batch_size, float(dt)
         self.wake_config, self.params, self.options, self.limits = wake, params, options, limits
         vehicle: Vehicle = aerosonde(nseg=wake.nseg, tailplane=wake.tailplane)
@@ -113,6 +122,10 @@ class FormationSimulator:
         # ELL's vehicle origin is the wing's root quarter-chord point (~ the aerodynamic centre);
         # the aircraft state is that of its CG. AeroSim gives both relative to the propeller hub.
         self.wing_origin_body = np.asarray(params.r_ac_body, float) - np.asarray(params.cg_gross_body, float)
+        # The compiled step needs lattice arrays even when the wake is off (it then skips ELL).
+        self._kernel_model = self.wake_model or WakeModel([vehicle])
+        self._packed = pack_aircraft(params, options)
+        self._limits = pack_limits(limits)
         self._steps = 0
         self._held_wind = np.zeros((batch_size, n_vehicles, 3))
         self._held_omega = np.zeros((batch_size, n_vehicles, 3))
@@ -154,8 +167,12 @@ class FormationSimulator:
         controls = np.asarray(controls, dtype=float)
         if controls.ndim != 3 or controls.shape[:2] != (b, v) or controls.shape[2] not in (4, 5):
             raise ValueError(f"FormationSimulator.step: controls must have shape {(b, v, 4)}, got {controls.shape}")
+        if not np.all(np.isfinite(controls)):
+            raise ValueError("FormationSimulator.step: controls contain NaN or inf")
         amb = np.zeros((b, v, 3)) if ambient_wind_ned is None else np.broadcast_to(np.asarray(ambient_wind_ned, float), (b, v, 3))
         turb = np.zeros((b, v, 3)) if turbulence_body is None else np.broadcast_to(np.asarray(turbulence_body, float), (b, v, 3))
+        if self.backend == "numba":
+            return self._step_compiled(state, controls, amb, turb)
         status_before = check_envelope(state.reshape(b * v, -1), WindInput(wind_ned=amb.reshape(b * v, 3)),
                                        self.limits, self.params).reshape(b, v)
         formation_ok = np.all(status_before == 0, axis=1)
@@ -171,3 +188,26 @@ class FormationSimulator:
         total_wind = WindInput(wind_ned=(amb + self._held_wind).reshape(b * v, 3), turbulence_body=turb.reshape(b * v, 3))
         status = check_envelope(new.reshape(b * v, -1), total_wind, self.limits, self.params).reshape(b, v)
         return StepResult(new, self._held_wind.copy(), self._held_omega.copy(), status, self._held_gamma)
+
+    def _step_compiled(self, state, controls, amb, turb) -> StepResult:
+        """The same step in one compiled call (:mod:`formation_env.sim.kernels`)."""
+        b, v = self.batch_size, self.n_vehicles
+        m = self._kernel_model
+        t = m.template
+        update = self._steps % self.wake_config.update_every == 0
+        self._steps += 1
+        if self._held_gamma is None or self._held_gamma.shape != (b, m.n_panels):
+            self._held_gamma = np.zeros((b, m.n_panels))
+        out = np.empty((b, v, N_STATES))
+        status = np.empty((b, v), dtype=np.int64)
+        kernel = step_batch_parallel if b >= _PARALLEL_MIN_BATCH else step_batch_serial
+        kernel(np.ascontiguousarray(state), np.ascontiguousarray(controls), np.ascontiguousarray(amb),
+               np.ascontiguousarray(turb), self._held_wind, self._held_omega, self._held_gamma, update,
+               self.wake_model is not None, self.wing_origin_body,
+               t.knot_x1_b, t.knot_x3_b, t.knot_vehicle, t.knot_surface, t.surface_origin_b, t.surface_vehicle,
+               t.surface_knot_start, t.surface_panel_start, t.surface_core_scale, t.panel_left_knot, t.panel_vehicle,
+               t.control_b, t.normal_b, m.eval_b, m.grad_w, t.vehicle_panel_start, t.cutoff_m, m._core_mode,
+               m._core_mode if m.viscous_aic else CORE_NONE, m.kinematic_viscosity,
+               self.dt, *self._packed, self._limits, out, status)
+        gamma = self._held_gamma.copy() if self.wake_model is not None else None
+        return StepResult(out, self._held_wind.copy(), self._held_omega.copy(), status, gamma)
