@@ -12,7 +12,7 @@ import argparse
 import importlib
 import sys
 
-COMMANDS = ("verify", "bench", "demo", "trim", "modes", "run")
+COMMANDS = ("verify", "bench", "demo", "trim", "modes", "run", "report", "replay")
 
 
 def build_parser() -> argparse.ArgumentParser:
