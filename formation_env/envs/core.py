@@ -85,12 +85,9 @@ class FormationCore:
         act = np.zeros((b, n, 4))
         act[:, self.mask] = agent_actions
         target = ActionTarget(self.config.action_mode, act, self.mask)
-        collided = np.zeros(b, dtype=bool)
-        crashed = np.zeros((b, n), dtype=bool)
-        for _ in range(self.substeps):
-            eng.physics_step(target)
-            collided |= self._collided_now()
-            crashed |= eng.status != 0
+        status_any, min_sep = eng.advance(target, self.substeps)
+        collided = min_sep < self.config.collision_separation_b * AEROSONDE_SPAN_M
+        crashed = status_any != 0
         error = slot_error_m(eng.state, eng.position_demand_now())
         saving = self._saving()
         terms = reward_terms(self.config.reward, error, self.previous_error, act, self.previous_action, saving,
@@ -110,13 +107,6 @@ class FormationCore:
         return build_observations(eng.state, eng.induced, eng.omega, eng.ambient_wind(), eng.turbulence_body(),
                                   eng.position_demand_now(), eng.velocity_demand, self.previous_action,
                                   sc.airspeed_mps, sc.altitude_m)
-
-    def _collided_now(self) -> np.ndarray:
-        if self.engine.n_vehicles < 2:
-            return np.zeros(self.engine.batch_size, dtype=bool)
-        with np.errstate(invalid="ignore"):
-            sep = min_separation_m(self.engine.state).min(axis=1)
-        return sep < self.config.collision_separation_b * AEROSONDE_SPAN_M
 
     @property
     def benefit_enabled(self) -> bool:

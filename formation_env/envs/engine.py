@@ -24,6 +24,7 @@ from ..atmosphere.wind import WindInput
 from ..scenarios import Scenario, get_scenario
 from ..sim import FormationSimulator, WakeConfig
 from .config import EnvConfig
+from .rewards import min_separation_m as _min_separation_all
 
 __all__ = ["FormationEpisode", "ActionTarget"]
 
@@ -41,6 +42,7 @@ class ActionTarget:
     mode: str
     actions: np.ndarray
     mask: np.ndarray
+    mapped: np.ndarray | None = None  # the surfaces command, computed once per decision
 
 
 class FormationEpisode:
@@ -84,6 +86,7 @@ class FormationEpisode:
         self.ref_vel = np.zeros((b, 3))
         self.turbulence: list[DrydenTurbulence | None] = [None] * b
         self.rngs = [np.random.default_rng(0) for _ in range(b)]
+        self._demands_at = None  # step counts at which the stored demands were computed
 
     # ------------------------------------------------------------------ reset
     def reset(self, indices=None, seeds=None) -> None:
@@ -132,6 +135,7 @@ class FormationEpisode:
             self.commands[i] = self.trim.controls[0, :4]
         self.sim.reset_wake_hold()
         self._update_demands(self._velocity_ned())
+        self._demands_at = None
 
     # ------------------------------------------------------------------ pieces
     @property
@@ -172,8 +176,10 @@ class FormationEpisode:
 
     def position_demand_now(self) -> np.ndarray:
         """(B, V, 3) demanded positions at the current time and state (the stored demands are those
-        of the last physics step's start)."""
-        self._update_demands(self._velocity_ned())
+        of the last physics step's start); computed once per state."""
+        if self._demands_at is None or not np.array_equal(self._demands_at, self.step_count):
+            self._update_demands(self._velocity_ned())
+            self._demands_at = self.step_count.copy()
         return self.position_demand
 
     def _update_demands(self, vel_ned: np.ndarray) -> None:
@@ -189,6 +195,38 @@ class FormationEpisode:
                 self.position_demand[i, j + 1], self.velocity_demand[i, j + 1] = p, w
 
     # ------------------------------------------------------------------ step
+    def advance(self, target: ActionTarget | None, n_steps: int) -> tuple[np.ndarray, np.ndarray]:
+        """``n_steps`` physics steps with the actions held. Returns (status OR-ed over the steps
+        (B, V), smallest CG separation seen (B,)). When every UAV is commanded directly the steps run
+        in one compiled call; otherwise step by step with the PID baseline."""
+        b, v = self.batch_size, self.n_vehicles
+        if target is not None and target.mode == "surfaces" and target.mask.all():
+            if target.mapped is None:
+                target.mapped = self._apply_commands(target, self.commands)
+            amb = np.empty((n_steps, b, v, 3))
+            turb = np.zeros((n_steps, b, v, 3))
+            for i in range(b):
+                for s in range(n_steps):
+                    amb[s, i] = self.scenario.ambient_wind_ned(float((self.step_count[i] + s) * self.dt)) + self.steady_wind[i]
+                t = self.turbulence[i]
+                if t is not None:
+                    turb[0, i] = t.velocity_body
+                    for s in range(1, n_steps):
+                        turb[s, i] = t.step()
+                    t.step()
+            self.commands = target.mapped
+            res, status_any, min_sep = self.sim.step_many(self.state, target.mapped, amb, turb)
+            self._take(res, n_steps)
+            return status_any, min_sep
+        status_any = np.zeros((b, v), dtype=np.int64)
+        min_sep = np.full(b, np.inf)
+        for _ in range(n_steps):
+            self.physics_step(target)
+            status_any |= self.status
+            with np.errstate(invalid="ignore"):
+                min_sep = np.fmin(min_sep, _min_separation_all(self.state).min(axis=1))
+        return status_any, min_sep
+
     def physics_step(self, target: ActionTarget | None = None) -> None:
         """Advance every formation by one physics step (dt) with the agents' actions held."""
         b, v = self.batch_size, self.n_vehicles
@@ -196,13 +234,15 @@ class FormationEpisode:
         turb = self.turbulence_body()
         if target is not None and target.mode == "surfaces" and target.mask.all():
             # Every UAV is commanded directly: the PID baseline (and its observation) is not needed.
-            cmd = self._apply_commands(target, self.commands)
-            self._advance(cmd, amb, turb)
+            if target.mapped is None:
+                target.mapped = self._apply_commands(target, self.commands)
+            self._advance(target.mapped, amb, turb)
             return
         flat = self.state.reshape(b * v, N_STATES)
         wind = WindInput(wind_ned=(amb + self.induced).reshape(b * v, 3), turbulence_body=turb.reshape(b * v, 3))
         obs0 = self._fcs_observation(flat, np.zeros(3), np.zeros(3), wind)
         self._update_demands(obs0["velocity_ned"].reshape(b, v, 3))
+        self._demands_at = None
         pd, vd = self.position_demand.copy(), self.velocity_demand.copy()
         if target is not None and target.mode == "setpoints":
             pd, vd = self._apply_setpoints(target, pd, vd)
@@ -214,19 +254,24 @@ class FormationEpisode:
         self._advance(cmd, amb, turb)
 
     def _advance(self, cmd: np.ndarray, amb: np.ndarray, turb: np.ndarray) -> None:
-        b = self.batch_size
         self.commands = cmd
         res = self.sim.step(self.state, cmd, amb, turb)
-        self.state, self.induced, self.omega, self.status = res.state, res.induced_wind_ned, res.induced_omega_body, res.status
-        self.circulation = res.circulation
-        self.step_count += 1
-        for i, t in enumerate(self.turbulence):
+        for t in self.turbulence:
             if t is not None:
                 t.step()
+        self._take(res, 1)
+
+    def _take(self, res, n_steps: int) -> None:
+        b = self.batch_size
+        self.state, self.induced, self.omega, self.status = res.state, res.induced_wind_ned, res.induced_omega_body, res.status
+        self.circulation = res.circulation
+        self.step_count += n_steps
+        self._demands_at = None
         if self.config.randomisation.any_manoeuvre:
-            for i in range(b):
-                _, vel = self._reference(i, float(self.time_s[i] - self.dt))
-                self.ref_pos[i] = self.ref_pos[i] + self.dt * vel
+            for s in range(n_steps):  # the manoeuvring reference path integrates on the physics grid
+                for i in range(b):
+                    _, vel = self._reference(i, float((self.step_count[i] - n_steps + s) * self.dt))
+                    self.ref_pos[i] = self.ref_pos[i] + self.dt * vel
 
     def _limits(self) -> tuple[np.ndarray, np.ndarray]:
         lim = self.surface_limit_rad

@@ -29,14 +29,20 @@ neighbours                  6(V-1) 30/5   m, m/s     each other UAV (index order
 
 from __future__ import annotations
 
+import math
+
+import numba as nb
 import numpy as np
 
-from ..aircraft import air_data_of
+from ..aircraft import AEROSONDE, DEFAULT_OPTIONS, air_data_of
+from ..aircraft.kernels import _air
+from ..aircraft.kernels import pack as _pack_aircraft
 from ..aircraft.state import N_STATES
 from ..atmosphere.wind import WindInput
 from ..frames import dcm_body_to_ned_from_quaternion, euler_from_quaternion
 
-__all__ = ["OBS_CLIP", "GROUPS", "observation_size", "group_sizes", "build_observations", "to_dict"]
+__all__ = ["OBS_CLIP", "GROUPS", "observation_size", "group_sizes", "build_observations",
+           "build_observations_reference", "to_dict"]
 
 OBS_CLIP = 10.0
 OMEGA_REF = 545.0
@@ -66,7 +72,18 @@ def _to_track(vec, chi):
 
 def build_observations(state, induced_ned, omega_body, ambient_ned, turbulence_body, position_demand, velocity_demand,
                        previous_action, trim_airspeed, scenario_altitude) -> np.ndarray:
-    """Observation vectors of every vehicle, (B, V, D) float64, normalised and clipped."""
+    """Observation vectors of every vehicle, (B, V, D) float64, normalised and clipped (compiled)."""
+    b, v = state.shape[:2]
+    out = np.empty((b, v, observation_size(v)))
+    f = np.ascontiguousarray
+    _obs_kernel(f(state), f(induced_ned), f(omega_body), f(ambient_ned), f(turbulence_body), f(position_demand),
+                f(velocity_demand), f(previous_action), float(trim_airspeed), float(scenario_altitude), _AIR_PARAMS, out)
+    return out
+
+
+def build_observations_reference(state, induced_ned, omega_body, ambient_ned, turbulence_body, position_demand,
+                                 velocity_demand, previous_action, trim_airspeed, scenario_altitude) -> np.ndarray:
+    """The same observations in plain numpy (the readable definition; tests hold the compiled one to it)."""
     b, v = state.shape[:2]
     flat = state.reshape(b * v, N_STATES)
     with np.errstate(all="ignore"):
@@ -111,3 +128,90 @@ def to_dict(vector: np.ndarray, n_vehicles: int) -> dict[str, np.ndarray]:
             out[name] = vector[..., k:k + size]
         k += size
     return out
+
+
+_AIR_PARAMS = _pack_aircraft(AEROSONDE, DEFAULT_OPTIONS)[0]  # only the air-data bounds are read
+
+
+@nb.njit(cache=True, error_model="numpy")
+def _clean(x):
+    if x != x:
+        return 0.0
+    return min(OBS_CLIP, max(-OBS_CLIP, x))
+
+
+@nb.njit(cache=True, error_model="numpy")
+def _obs_kernel(state, induced, omega, amb, turb, pd, vd, prev, trim_airspeed, altitude, air_params, out):
+    b, nv = state.shape[0], state.shape[1]
+    wind = np.zeros(12)
+    vel = np.empty((nv, 3))
+    chi = np.empty(nv)
+    for i in range(b):
+        for a in range(nv):
+            x = state[i, a]
+            e0, ex, ey, ez = x[6], x[7], x[8], x[9]
+            r00 = e0 * e0 + ex * ex - ey * ey - ez * ez
+            r01 = 2.0 * (ex * ey - e0 * ez)
+            r02 = 2.0 * (ex * ez + e0 * ey)
+            r10 = 2.0 * (ex * ey + e0 * ez)
+            r11 = e0 * e0 - ex * ex + ey * ey - ez * ez
+            r12 = 2.0 * (ey * ez - e0 * ex)
+            r20 = 2.0 * (ex * ez - e0 * ey)
+            r21 = 2.0 * (ey * ez + e0 * ex)
+            r22 = e0 * e0 - ex * ex - ey * ey + ez * ez
+            vel[a, 0] = r00 * x[0] + r01 * x[1] + r02 * x[2]
+            vel[a, 1] = r10 * x[0] + r11 * x[1] + r12 * x[2]
+            vel[a, 2] = r20 * x[0] + r21 * x[1] + r22 * x[2]
+            chi[a] = math.atan2(vd[i, a, 1], vd[i, a, 0])
+        for a in range(nv):
+            x = state[i, a]
+            o = out[i, a]
+            for k in range(3):
+                wind[k] = amb[i, a, k] + induced[i, a, k]
+                wind[3 + k] = turb[i, a, k]
+            va, al, be = _air(x, wind, air_params)[:3]
+            e0, ex, ey, ez = x[6], x[7], x[8], x[9]
+            n2 = e0 * e0 + ex * ex + ey * ey + ez * ez
+            phi = math.atan2(2.0 * (e0 * ex + ey * ez), e0 * e0 - ex * ex - ey * ey + ez * ez)
+            theta = math.asin(min(1.0, max(-1.0, 2.0 * (e0 * ey - ex * ez) / n2)))
+            psi = math.atan2(2.0 * (ex * ey + e0 * ez), e0 * e0 + ex * ex - ey * ey - ez * ez)
+            c, s = math.cos(chi[a]), math.sin(chi[a])
+            o[0] = (va - trim_airspeed) / 5.0
+            o[1] = al / 0.1
+            o[2] = be / 0.1
+            o[3] = phi / 0.5
+            o[4] = theta / 0.5
+            o[5] = ((psi - chi[a] + math.pi) % (2.0 * math.pi) - math.pi) / 0.5
+            o[6], o[7], o[8] = x[3], x[4], x[5]
+            o[9] = (-x[12] - altitude) / 50.0
+            dx, dy, dz = x[10] - pd[i, a, 0], x[11] - pd[i, a, 1], x[12] - pd[i, a, 2]
+            o[10], o[11], o[12] = (c * dx + s * dy) / 10.0, (-s * dx + c * dy) / 10.0, dz / 10.0
+            dx, dy, dz = vel[a, 0] - vd[i, a, 0], vel[a, 1] - vd[i, a, 1], vel[a, 2] - vd[i, a, 2]
+            o[13], o[14], o[15] = (c * dx + s * dy) / 5.0, (-s * dx + c * dy) / 5.0, dz / 5.0
+            r00 = e0 * e0 + ex * ex - ey * ey - ez * ez
+            r01 = 2.0 * (ex * ey - e0 * ez)
+            r02 = 2.0 * (ex * ez + e0 * ey)
+            r10 = 2.0 * (ex * ey + e0 * ez)
+            r11 = e0 * e0 - ex * ex + ey * ey - ez * ez
+            r12 = 2.0 * (ey * ez - e0 * ex)
+            r20 = 2.0 * (ex * ez - e0 * ey)
+            r21 = 2.0 * (ey * ez + e0 * ex)
+            r22 = e0 * e0 - ex * ex - ey * ey + ez * ez
+            w0, w1, w2 = induced[i, a, 0], induced[i, a, 1], induced[i, a, 2]
+            o[16] = r00 * w0 + r10 * w1 + r20 * w2  # body = R^T ned
+            o[17] = r01 * w0 + r11 * w1 + r21 * w2
+            o[18] = r02 * w0 + r12 * w1 + r22 * w2
+            o[19], o[20], o[21] = omega[i, a, 0], omega[i, a, 1], omega[i, a, 2]
+            o[22] = x[14] / OMEGA_REF - 1.0
+            o[23], o[24], o[25], o[26] = prev[i, a, 0], prev[i, a, 1], prev[i, a, 2], prev[i, a, 3]
+            k = 27
+            for j in range(nv):
+                if j == a:
+                    continue
+                dx, dy, dz = state[i, j, 10] - x[10], state[i, j, 11] - x[11], state[i, j, 12] - x[12]
+                o[k], o[k + 1], o[k + 2] = (c * dx + s * dy) / 30.0, (-s * dx + c * dy) / 30.0, dz / 30.0
+                dx, dy, dz = vel[j, 0] - vel[a, 0], vel[j, 1] - vel[a, 1], vel[j, 2] - vel[a, 2]
+                o[k + 3], o[k + 4], o[k + 5] = (c * dx + s * dy) / 5.0, (-s * dx + c * dy) / 5.0, dz / 5.0
+                k += 6
+            for k in range(o.shape[0]):
+                o[k] = _clean(o[k])

@@ -2,6 +2,9 @@
 
 from __future__ import annotations
 
+import math
+
+import numba as nb
 import numpy as np
 
 from .config import RewardWeights
@@ -16,11 +19,23 @@ def slot_error_m(state: np.ndarray, position_demand: np.ndarray) -> np.ndarray:
 
 def min_separation_m(state: np.ndarray) -> np.ndarray:
     """(B, V) distance from each UAV to its nearest neighbour (inf when flying alone), m."""
-    pos = state[..., 10:13]
-    d = np.linalg.norm(pos[:, :, None, :] - pos[:, None, :, :], axis=-1)
-    v = pos.shape[1]
-    d[:, np.arange(v), np.arange(v)] = np.inf
-    return d.min(axis=-1)
+    out = np.empty(state.shape[:2])
+    _min_separation(np.ascontiguousarray(state), out)
+    return out
+
+
+@nb.njit(cache=True, error_model="numpy")
+def _min_separation(state, out):
+    for b in range(state.shape[0]):
+        for i in range(state.shape[1]):
+            best = np.inf
+            for j in range(state.shape[1]):
+                if j != i:
+                    d = math.sqrt((state[b, i, 10] - state[b, j, 10]) ** 2 + (state[b, i, 11] - state[b, j, 11]) ** 2
+                                  + (state[b, i, 12] - state[b, j, 12]) ** 2)
+                    if d < best or d != d:
+                        best = d
+            out[b, i] = best
 
 
 def reward_terms(w: RewardWeights, error, previous_error, action, previous_action, saving, collided, crashed) -> dict:

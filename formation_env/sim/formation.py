@@ -33,7 +33,7 @@ from ..frames import dcm_body_to_ned_from_quaternion, euler_from_quaternion
 from ..geometry import Vehicle, aerosonde
 from ..wake import FormationState, WakeModel
 from ..wake.kernels import CORE_NONE
-from .kernels import pack_limits, step_batch_parallel, step_batch_serial
+from .kernels import pack_limits, step_batch_parallel, step_batch_serial, step_many_parallel, step_many_serial
 
 BACKENDS = ("numba", "numpy")
 _PARALLEL_MIN_BATCH = 16  # below this many formations, thread start-up costs more than it saves
@@ -188,6 +188,37 @@ class FormationSimulator:
         total_wind = WindInput(wind_ned=(amb + self._held_wind).reshape(b * v, 3), turbulence_body=turb.reshape(b * v, 3))
         status = check_envelope(new.reshape(b * v, -1), total_wind, self.limits, self.params).reshape(b, v)
         return StepResult(new, self._held_wind.copy(), self._held_omega.copy(), status, self._held_gamma)
+
+    def step_many(self, state: np.ndarray, controls: np.ndarray, ambient_seq: np.ndarray, turbulence_seq: np.ndarray):
+        """S physics steps with the controls held, in one compiled call (the same step as :meth:`step`).
+
+        ambient_seq, turbulence_seq: (S, B, V, 3), the winds of each step. Returns
+        ``(StepResult after the last step, status OR-ed over the steps (B, V), smallest CG separation
+        seen (B,))``. Inputs must already be valid (finite controls of the right shapes): this is the
+        inner loop of callers that validate once per decision.
+        """
+        b, v = self.batch_size, self.n_vehicles
+        m = self._kernel_model
+        t = m.template
+        nsub = ambient_seq.shape[0]
+        if self._held_gamma is None or self._held_gamma.shape != (b, m.n_panels):
+            self._held_gamma = np.zeros((b, m.n_panels))
+        out = np.empty((b, v, N_STATES))
+        status = np.empty((b, v), dtype=np.int64)
+        status_any = np.empty((b, v), dtype=np.int64)
+        min_sep = np.empty(b)
+        kernel = step_many_parallel if b >= _PARALLEL_MIN_BATCH else step_many_serial
+        kernel(np.ascontiguousarray(state), np.ascontiguousarray(controls), np.ascontiguousarray(ambient_seq),
+               np.ascontiguousarray(turbulence_seq), self._held_wind, self._held_omega, self._held_gamma, self._steps,
+               self.wake_config.update_every, self.wake_model is not None, self.wing_origin_body,
+               t.knot_x1_b, t.knot_x3_b, t.knot_vehicle, t.knot_surface, t.surface_origin_b, t.surface_vehicle,
+               t.surface_knot_start, t.surface_panel_start, t.surface_core_scale, t.panel_left_knot, t.panel_vehicle,
+               t.control_b, t.normal_b, m.eval_b, m.grad_w, t.vehicle_panel_start, t.cutoff_m, m._core_mode,
+               m._core_mode if m.viscous_aic else CORE_NONE, m.kinematic_viscosity,
+               self.dt, *self._packed, self._limits, out, status, status_any, min_sep)
+        self._steps += nsub
+        gamma = self._held_gamma.copy() if self.wake_model is not None else None
+        return StepResult(out, self._held_wind.copy(), self._held_omega.copy(), status, gamma), status_any, min_sep
 
     def _step_compiled(self, state, controls, amb, turb) -> StepResult:
         """The same step in one compiled call (:mod:`formation_env.sim.kernels`)."""

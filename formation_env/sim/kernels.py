@@ -176,3 +176,66 @@ def _make_batch(parallel: bool):
 
 step_batch_serial = _make_batch(False)
 step_batch_parallel = _make_batch(True)
+
+
+@_jit
+def min_separation(state):
+    """Smallest CG distance between any two aircraft of one formation (inf for one aircraft)."""
+    best = np.inf
+    nv = state.shape[0]
+    for i in range(nv):
+        for j in range(i + 1, nv):
+            d = math.sqrt((state[i, 10] - state[j, 10]) ** 2 + (state[i, 11] - state[j, 11]) ** 2
+                          + (state[i, 12] - state[j, 12]) ** 2)
+            if d < best or d != d:
+                best = d
+    return best
+
+
+def _make_many(parallel: bool):
+    @nb.njit(cache=True, parallel=parallel, error_model="numpy")
+    def step_many_batch(
+        state, controls, ambient_seq, turb_seq, held_wind, held_omega, gamma, step0, update_every, wake_on,
+        wing_origin_b,
+        knot_x1_b, knot_x3_b, knot_vehicle, knot_surface,
+        surface_origin_b, surface_vehicle, surface_knot_start, surface_panel_start, surface_core_scale,
+        panel_left_knot, panel_vehicle, control_b, normal_b, eval_b, grad_w, vehicle_panel_start,
+        cutoff, core_mode, aic_core_mode, nu,
+        dt, v, pJ, pCT, pCP, eR, eM, eP, eF, tT, tP, tR, tA, lim,
+        out_state, out_status, out_status_any, out_min_sep,
+    ):
+        """S = ambient_seq.shape[0] steps with the controls held: the same step_one per step;
+        status flags OR-ed over the steps and the smallest separation seen are returned too."""
+        nsub = ambient_seq.shape[0]
+        for b in nb.prange(state.shape[0]):
+            cur = state[b].copy()
+            nxt = np.empty_like(cur)
+            st = np.zeros(cur.shape[0], dtype=np.int64)
+            for a in range(cur.shape[0]):
+                out_status_any[b, a] = 0
+            sep = np.inf
+            for s in range(nsub):
+                update = (step0 + s) % update_every == 0
+                step_one(cur, controls[b], ambient_seq[s, b], turb_seq[s, b], held_wind[b], held_omega[b], gamma[b],
+                         update, wake_on, wing_origin_b, knot_x1_b, knot_x3_b, knot_vehicle, knot_surface,
+                         surface_origin_b, surface_vehicle, surface_knot_start, surface_panel_start, surface_core_scale,
+                         panel_left_knot, panel_vehicle, control_b, normal_b, eval_b, grad_w, vehicle_panel_start,
+                         cutoff, core_mode, aic_core_mode, nu,
+                         dt, v, pJ, pCT, pCP, eR, eM, eP, eF, tT, tP, tR, tA, lim,
+                         nxt, st)
+                cur[:, :] = nxt
+                for a in range(cur.shape[0]):
+                    out_status_any[b, a] |= st[a]
+                d = min_separation(cur)
+                if d < sep or d != d:
+                    sep = d
+            out_state[b] = cur
+            for a in range(cur.shape[0]):
+                out_status[b, a] = st[a]
+            out_min_sep[b] = sep
+
+    return step_many_batch
+
+
+step_many_serial = _make_many(False)
+step_many_parallel = _make_many(True)
