@@ -124,3 +124,17 @@ def test_truncation_at_the_time_limit():
         n += 1
     assert n == 30 and all(trunc.values()) and not any(term.values())
     assert info["uav_1"]["time_s"] == pytest.approx(3.0)
+
+
+def test_compiled_observations_equal_the_numpy_definition():
+    from formation_env.envs.observations import build_observations, build_observations_reference
+
+    env = formation_env.parallel_env("reconfiguration", action_mode="residual", randomisation=RANDOM)
+    env.reset(seed=4)
+    rng = np.random.default_rng(1)
+    for _ in range(40):
+        env.step({a: rng.uniform(-1, 1, 4) for a in env.agents})
+        e, c = env.engine, env.core
+        args = (e.state, e.induced, e.omega, e.ambient_wind(), e.turbulence_body(), e.position_demand_now(),
+                e.velocity_demand, c.previous_action, e.scenario.airspeed_mps, e.scenario.altitude_m)
+        np.testing.assert_allclose(build_observations(*args), build_observations_reference(*args), rtol=0, atol=1e-12)

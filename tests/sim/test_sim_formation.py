@@ -91,3 +91,22 @@ def test_bad_controls_raise():
         sim.step(st0, bad)
     with pytest.raises(ValueError, match="backend"):
         FormationSimulator(2, 1, backend="cuda")
+
+
+def test_step_many_equals_repeated_steps():
+    st0, u = _pair_states(3)
+    rng = np.random.default_rng(2)
+    amb = rng.normal(0, 1, (5, 3, 2, 3))
+    turb = rng.normal(0, 0.5, (5, 3, 2, 3))
+    a, b = FormationSimulator(2, 3), FormationSimulator(2, 3)
+    res_many, status_any, min_sep = a.step_many(st0, u, amb, turb)
+    x = st0
+    seps = []
+    for s in range(5):
+        r = b.step(x, u, amb[s], turb[s])
+        x = r.state
+        seps.append(np.linalg.norm(x[:, 0, 10:13] - x[:, 1, 10:13], axis=1))
+    assert np.array_equal(res_many.state, x)
+    assert np.array_equal(res_many.induced_wind_ned, r.induced_wind_ned)
+    np.testing.assert_allclose(min_sep, np.min(seps, axis=0), rtol=1e-15)
+    assert np.all(status_any == 0)
