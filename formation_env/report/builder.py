@@ -133,7 +133,7 @@ def wake_field(ctx: ReportContext) -> Section:
         fig, data = nseg_sweep_figure(fig_no, nsegs=nsegs, n_points=41 if ctx.quick else 121)
         sec.data[f"fig_{fig_no}"] = data
         p = ctx.save(fig, f"fig_{fig_no.replace('.', '_')}_nseg.png")
-        sec.figures.append((p, f"Fig. {fig_no}: effective induced velocity against {data['caption']}, nseg {list(nsegs)}"))
+        sec.figures.append((p, f"Fig. {fig_no}: effective induced velocity against {data['caption']}, nseg = {', '.join(map(str, nsegs))}"))
         for case, cd in data["cases"].items():
             w10, w20 = np.asarray(cd["wind_body_mps"]["10"]), np.asarray(cd["wind_body_mps"]["20"])
             rel = float(np.abs(w10 - w20).max() / np.abs(w20).max())
