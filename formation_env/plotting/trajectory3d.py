@@ -39,11 +39,12 @@ def trajectory_3d_figure(log: EpisodeLog, n_snapshots: int = 5, relative: bool =
         rel = p - p[:, :1]
         for i in range(log.n_vehicles):
             ax2.plot(rel[:, i, 1], rel[:, i, 0], -rel[:, i, 2], "-", color=vehicle_colour(i), lw=1.0, label=f"uav_{i}")
-            ax2.scatter(rel[0, i, 1], rel[0, i, 0], -rel[0, i, 2], color=vehicle_colour(i), marker="o", s=15)
-            ax2.scatter(rel[-1, i, 1], rel[-1, i, 0], -rel[-1, i, 2], color=vehicle_colour(i), marker="s", s=15)
+        for k in snaps:  # the aircraft and their wake legs at the same instants, true scale, equal axes
+            g = geometry_from_euler(rel[k], log.euler_rad[k], log.velocity_ned[k], wind[k])
+            draw_formation_3d(ax2, g, labels=False, trails=rel.swapaxes(0, 1))
         ax2.set_xlabel("east rel. (m)")
         ax2.set_ylabel("north rel. (m)")
         ax2.set_zlabel("altitude rel. (m)")
-        ax2.set_title("relative to uav_0 (o start, square end)", fontsize=9)
+        ax2.set_title(f"relative to uav_0 (leader-fixed NED axes, true scale), {len(snaps)} instants", fontsize=9)
         ax2.legend(fontsize=7)
     return fig
