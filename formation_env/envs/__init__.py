@@ -18,3 +18,11 @@ def env(scenario: str = "formation_keeping", render_mode: str | None = None, **o
     from pettingzoo.utils.conversions import parallel_to_aec
 
     return parallel_to_aec(parallel_env(scenario, render_mode=render_mode, **options))
+
+
+def __getattr__(name):  # the vector envs import stable-baselines3: load them on first use
+    if name in ("FormationVecEnv", "FormationVectorEnv"):
+        from . import vector
+
+        return getattr(vector, name)
+    raise AttributeError(name)

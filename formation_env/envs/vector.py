@@ -1,0 +1,226 @@
+"""Vector environments over the batched core: B formations stepped in one call.
+
+* :class:`FormationVecEnv`: a Stable-Baselines3 ``VecEnv`` for shared-parameter learning. Every
+  learning UAV of every formation is one SB3 env index (``num_envs = B x agents per formation``),
+  index ``f * A + k`` being agent ``k`` of formation ``f``.
+* :class:`FormationVectorEnv`: the same as a Gymnasium ``VectorEnv`` (same-step autoreset).
+
+Only finished formations are reset (auto-reset); a formation's episode ends for all its agents at
+once. SB3 conventions: ``infos[i]["terminal_observation"]`` carries the last observation of a
+finished episode, ``infos[i]["TimeLimit.truncated"]`` whether it ended by the time limit, and
+``infos[i]["episode"] = {"r", "l", "t"}`` its return and length (so no Monitor wrapper is needed).
+
+Seeding: ``seed(s)`` (SB3) / ``reset(seed=s)`` (Gymnasium) give formation ``f`` the seed
+``s + f * A`` for its next episode, exactly as a single env reset with that seed; later episodes
+draw their seeds from a generator seeded by ``s``. Formations of a batch evolve exactly as the
+same formations in single envs with those seeds (bit for bit; tested).
+"""
+
+from __future__ import annotations
+
+import time
+
+import gymnasium as gym
+import numpy as np
+from gymnasium import spaces
+from gymnasium.vector import AutoresetMode
+from stable_baselines3.common.vec_env.base_vec_env import VecEnv
+
+from .config import EnvConfig
+from .core import FormationCore
+from .observations import OBS_CLIP
+from .parallel import make_config
+
+__all__ = ["FormationVecEnv", "FormationVectorEnv", "BatchedFormations"]
+
+
+class BatchedFormations:
+    """Shared logic of the vector envs: flat (num_envs, ...) arrays over a FormationCore."""
+
+    def __init__(self, n_formations: int, config: EnvConfig, seed: int | None = None) -> None:
+        if config.obs_mode != "flat":
+            raise ValueError("vector envs use flat observations (obs_mode='flat')")
+        self.core = FormationCore(config, batch_size=n_formations)
+        self.n_formations = self.core.batch_size
+        self.agents_per_formation = len(self.core.agent_indices)
+        self.num_envs = self.n_formations * self.agents_per_formation
+        self.obs_size = self.core.obs_size
+        self._seed_stream = np.random.SeedSequence(seed)
+        self._pending_seeds: list[int | None] = [None] * self.n_formations
+        self.episode_return = np.zeros(self.num_envs)
+        self.episode_length = np.zeros(self.num_envs, dtype=np.int64)
+        self.t_start = time.perf_counter()
+
+    def set_seed(self, seed: int | None) -> None:
+        if seed is None:
+            self._seed_stream = np.random.SeedSequence()
+            self._pending_seeds = [None] * self.n_formations
+            return
+        if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)):
+            raise ValueError(f"seed must be an int or None, got {seed!r}")
+        a = self.agents_per_formation
+        self._seed_stream = np.random.SeedSequence(int(seed))
+        self._pending_seeds = [int(seed) + f * a for f in range(self.n_formations)]
+
+    def _seeds_for(self, formations) -> list[int]:
+        out = []
+        for f in formations:
+            s = self._pending_seeds[f]
+            if s is None:
+                s = int(self._seed_stream.spawn(1)[0].generate_state(1)[0])
+            self._pending_seeds[f] = None
+            out.append(s)
+        return out
+
+    def reset(self, formations=None) -> None:
+        idx = np.arange(self.n_formations) if formations is None else np.asarray(formations, dtype=np.int64)
+        self.core.reset(idx, self._seeds_for(idx))
+        for f in idx:
+            sl = slice(f * self.agents_per_formation, (f + 1) * self.agents_per_formation)
+            self.episode_return[sl] = 0.0
+            self.episode_length[sl] = 0
+
+    def observations(self) -> np.ndarray:
+        obs = self.core.observations()[:, list(self.core.agent_indices)]
+        return obs.reshape(self.num_envs, -1).astype(np.float32)
+
+    def validate(self, actions) -> np.ndarray:
+        a = np.asarray(actions, dtype=float)
+        if a.shape != (self.num_envs, 4):
+            raise ValueError(f"actions must have shape ({self.num_envs}, 4), got {a.shape}")
+        if not np.all(np.isfinite(a)):
+            bad = np.nonzero(~np.all(np.isfinite(a), axis=1))[0].tolist()
+            raise ValueError(f"actions of env index(es) {bad} contain NaN or inf")
+        return np.clip(a, -1.0, 1.0)
+
+    def step(self, actions: np.ndarray):
+        """Returns obs (after auto-reset), rewards, terminated, truncated (num_envs,) and, for the
+        finished formations, their final observations (num_envs, D) and finished mask."""
+        a = self.validate(actions).reshape(self.n_formations, self.agents_per_formation, 4)
+        rewards_v, term_f, trunc_f = self.core.step(a)
+        rewards = rewards_v[:, list(self.core.agent_indices)].reshape(-1)
+        rep = self.agents_per_formation
+        terminated, truncated = np.repeat(term_f, rep), np.repeat(trunc_f, rep)
+        self.episode_return += rewards
+        self.episode_length += 1
+        done_f = term_f | trunc_f
+        final_obs = None
+        if done_f.any():
+            final_obs = self.observations()
+            self.final_episode = (self.episode_return.copy(), self.episode_length.copy())
+            self.reset(np.nonzero(done_f)[0])
+        return self.observations(), rewards.astype(np.float32), terminated, truncated, final_obs, np.repeat(done_f, rep)
+
+
+class FormationVecEnv(VecEnv):
+    """SB3 VecEnv of ``n_formations`` formations (see the module docstring).
+
+    >>> from stable_baselines3 import PPO
+    >>> venv = FormationVecEnv(64, scenario="formation_keeping", learning="followers", action_mode="residual")
+    >>> PPO("MlpPolicy", venv).learn(10_000)
+    """
+
+    def __init__(self, n_formations: int, config: EnvConfig | None = None, seed: int | None = None,
+                 detailed_infos: bool = False, **options) -> None:
+        cfg = make_config(config, **options)
+        self.batch = BatchedFormations(n_formations, cfg, seed)
+        self.config = cfg
+        self.detailed_infos = bool(detailed_infos)
+        obs_space = spaces.Box(-OBS_CLIP, OBS_CLIP, (self.batch.obs_size,), dtype=np.float32)
+        act_space = spaces.Box(-1.0, 1.0, (4,), dtype=np.float32)
+        self.render_mode = None
+        super().__init__(self.batch.num_envs, obs_space, act_space)
+        self._actions = None
+        if seed is not None:
+            self.batch.set_seed(seed)
+
+    def seed(self, seed: int | None = None):
+        self.batch.set_seed(seed)
+        a = self.batch.agents_per_formation
+        return [None if seed is None else int(seed) + (i // a) * a for i in range(self.num_envs)]
+
+    def reset(self):
+        if any(s is not None for s in self._seeds):  # SB3's seed() stores per-index seeds
+            self.batch.set_seed(self._seeds[0])
+        self.batch.reset()
+        self._reset_seeds()
+        self._reset_options()
+        self.reset_infos = [{} for _ in range(self.num_envs)]
+        return self.batch.observations()
+
+    def step_async(self, actions: np.ndarray) -> None:
+        self._actions = actions
+
+    def step_wait(self):
+        if self._actions is None:
+            raise RuntimeError("step_wait() called without step_async()")
+        obs, rewards, terminated, truncated, final_obs, done = self.batch.step(self._actions)
+        self._actions = None
+        infos: list[dict] = [{} for _ in range(self.num_envs)]
+        if self.detailed_infos:
+            core = self.batch.core
+            for f in range(self.batch.n_formations):
+                per_vehicle = core.infos(f)
+                for k, v in enumerate(core.agent_indices):
+                    infos[f * self.batch.agents_per_formation + k] = per_vehicle[v]
+        if final_obs is not None:
+            ret, length = self.batch.final_episode
+            elapsed = time.perf_counter() - self.batch.t_start
+            for i in np.nonzero(done)[0]:
+                infos[i]["terminal_observation"] = final_obs[i]
+                infos[i]["TimeLimit.truncated"] = bool(truncated[i])
+                infos[i]["episode"] = {"r": float(ret[i]), "l": int(length[i]), "t": round(elapsed, 6)}
+        return obs, rewards, terminated | truncated, infos
+
+    def close(self) -> None:
+        pass
+
+    def get_attr(self, attr_name, indices=None):
+        return [getattr(self, attr_name) for _ in self._get_indices(indices)]
+
+    def set_attr(self, attr_name, value, indices=None) -> None:
+        setattr(self, attr_name, value)
+
+    def env_method(self, method_name, *method_args, indices=None, **method_kwargs):
+        return [getattr(self, method_name)(*method_args, **method_kwargs) for _ in self._get_indices(indices)]
+
+    def env_is_wrapped(self, wrapper_class, indices=None):
+        return [False for _ in self._get_indices(indices)]
+
+
+class FormationVectorEnv(gym.vector.VectorEnv):
+    """Gymnasium VectorEnv of ``n_formations`` formations with same-step autoreset: a finished
+    sub-env's last observation and info are in ``infos["final_obs"]`` / ``infos["final_info"]``."""
+
+    metadata = {"autoreset_mode": AutoresetMode.SAME_STEP}
+
+    def __init__(self, n_formations: int, config: EnvConfig | None = None, seed: int | None = None, **options) -> None:
+        cfg = make_config(config, **options)
+        self.batch = BatchedFormations(n_formations, cfg, seed)
+        self.config = cfg
+        self.num_envs = self.batch.num_envs
+        self.single_observation_space = spaces.Box(-OBS_CLIP, OBS_CLIP, (self.batch.obs_size,), dtype=np.float32)
+        self.single_action_space = spaces.Box(-1.0, 1.0, (4,), dtype=np.float32)
+        self.observation_space = gym.vector.utils.batch_space(self.single_observation_space, self.num_envs)
+        self.action_space = gym.vector.utils.batch_space(self.single_action_space, self.num_envs)
+
+    def reset(self, *, seed=None, options=None):
+        if seed is not None:
+            if isinstance(seed, (list, tuple)):
+                raise ValueError("pass one int seed: formation f gets seed + f * agents_per_formation")
+            self.batch.set_seed(seed)
+        self.batch.reset()
+        return self.batch.observations(), {}
+
+    def step(self, actions):
+        obs, rewards, terminated, truncated, final_obs, done = self.batch.step(actions)
+        infos: dict = {}
+        if final_obs is not None:
+            fo = np.full(self.num_envs, None, dtype=object)
+            fi = np.full(self.num_envs, None, dtype=object)
+            ret, length = self.batch.final_episode
+            for i in np.nonzero(done)[0]:
+                fo[i] = final_obs[i]
+                fi[i] = {"episode_return": float(ret[i]), "episode_length": int(length[i])}
+            infos = {"final_obs": fo, "_final_obs": done.copy(), "final_info": fi, "_final_info": done.copy()}
+        return obs, rewards, terminated, truncated, infos
