@@ -97,8 +97,10 @@ def _fmt(v) -> str:
     return one(arr[0]) if arr.size == 1 else "(" + ", ".join(one(x) for x in arr) + ")"
 
 
-def _mark(ok) -> str:
-    return "n/a" if ok is None else ("ok" if ok else "**OUT**")
+def _mark(ok, tolerance: str = "") -> str:
+    if ok is None:
+        return "info" if tolerance == "info" else "n/a"
+    return "ok" if ok else "**OUT**"
 
 
 def markdown_table(rows: list[Row]) -> str:
@@ -106,7 +108,7 @@ def markdown_table(rows: list[Row]) -> str:
     for r in rows:
         err = "-" if r.error is None else f"{r.error:.2e}"
         name = r.name + (f" ({r.note})" if r.note else "")
-        lines.append(f"| {name} | {_fmt(r.computed)} | {_fmt(r.thesis)} | {err} | {r.tolerance} | {_mark(r.ok)} |")
+        lines.append(f"| {name} | {_fmt(r.computed)} | {_fmt(r.thesis)} | {err} | {r.tolerance} | {_mark(r.ok, r.tolerance)} |")
     return "\n".join(lines)
 
 
