@@ -29,6 +29,10 @@ def atomic_write(path: str | os.PathLike, writer: Callable[[Path], None], *, ove
         writer(tmp_path)
         if not overwrite and path.exists():  # appeared while we were writing
             raise FileExistsError(f"refusing to overwrite existing file {str(path)!r}")
+        # mkstemp creates the file private (0600); give it the permissions a plain open() would.
+        umask = os.umask(0)
+        os.umask(umask)
+        os.chmod(tmp_path, 0o666 & ~umask)
         os.replace(tmp_path, path)
     finally:
         if tmp_path.exists():

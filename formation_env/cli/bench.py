@@ -8,7 +8,7 @@ import platform
 
 from ._optional import import_available
 
-BENCH_MODULES = ("formation_env.wake.bench", "formation_env.aircraft.bench")
+BENCH_MODULES = ("formation_env.wake.bench", "formation_env.aircraft.bench", "formation_env.envs.bench")
 
 
 def register(sub) -> None:

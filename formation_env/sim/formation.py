@@ -213,7 +213,7 @@ class FormationSimulator:
                self.wake_config.update_every, self.wake_model is not None, self.wing_origin_body,
                t.knot_x1_b, t.knot_x3_b, t.knot_vehicle, t.knot_surface, t.surface_origin_b, t.surface_vehicle,
                t.surface_knot_start, t.surface_panel_start, t.surface_core_scale, t.panel_left_knot, t.panel_vehicle,
-               t.control_b, t.normal_b, m.eval_b, m.grad_w, t.vehicle_panel_start, t.cutoff_m, m._core_mode,
+               t.control_b, t.normal_b, m.aic_static, m.eval_b, m.grad_w, t.vehicle_panel_start, t.cutoff_m, m._core_mode,
                m._core_mode if m.viscous_aic else CORE_NONE, m.kinematic_viscosity,
                self.dt, *self._packed, self._limits, out, status, status_any, min_sep)
         self._steps += nsub
@@ -237,7 +237,7 @@ class FormationSimulator:
                self.wake_model is not None, self.wing_origin_body,
                t.knot_x1_b, t.knot_x3_b, t.knot_vehicle, t.knot_surface, t.surface_origin_b, t.surface_vehicle,
                t.surface_knot_start, t.surface_panel_start, t.surface_core_scale, t.panel_left_knot, t.panel_vehicle,
-               t.control_b, t.normal_b, m.eval_b, m.grad_w, t.vehicle_panel_start, t.cutoff_m, m._core_mode,
+               t.control_b, t.normal_b, m.aic_static, m.eval_b, m.grad_w, t.vehicle_panel_start, t.cutoff_m, m._core_mode,
                m._core_mode if m.viscous_aic else CORE_NONE, m.kinematic_viscosity,
                self.dt, *self._packed, self._limits, out, status)
         gamma = self._held_gamma.copy() if self.wake_model is not None else None

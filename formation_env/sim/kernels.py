@@ -97,7 +97,7 @@ def step_one(
     state, controls, ambient, turb, held_wind, held_omega, gamma, update_wake, wake_on, wing_origin_b,
     knot_x1_b, knot_x3_b, knot_vehicle, knot_surface,
     surface_origin_b, surface_vehicle, surface_knot_start, surface_panel_start, surface_core_scale,
-    panel_left_knot, panel_vehicle, control_b, normal_b, eval_b, grad_w, vehicle_panel_start,
+    panel_left_knot, panel_vehicle, control_b, normal_b, aic_static, eval_b, grad_w, vehicle_panel_start,
     cutoff, core_mode, aic_core_mode, nu,
     dt, v, pJ, pCT, pCP, eR, eM, eP, eF, tT, tP, tR, tA, lim,
     out_state, out_status,
@@ -131,7 +131,7 @@ def step_one(
             wind_b = np.empty((nv, 3))
             evaluate_one(pos, euler, speed, alpha, beta, knot_x1_b, knot_x3_b, knot_vehicle, knot_surface,
                          surface_origin_b, surface_vehicle, surface_knot_start, surface_panel_start, surface_core_scale,
-                         panel_left_knot, panel_vehicle, control_b, normal_b, eval_b, grad_w, vehicle_panel_start,
+                         panel_left_knot, panel_vehicle, control_b, normal_b, aic_static, eval_b, grad_w, vehicle_panel_start,
                          cutoff, core_mode, aic_core_mode, nu, gamma, scratch_pts, held_wind, wind_b, held_omega, omega_ned)
         else:
             for a in range(nv):
@@ -157,7 +157,7 @@ def _make_batch(parallel: bool):
         state, controls, ambient, turb, held_wind, held_omega, gamma, update_wake, wake_on, wing_origin_b,
         knot_x1_b, knot_x3_b, knot_vehicle, knot_surface,
         surface_origin_b, surface_vehicle, surface_knot_start, surface_panel_start, surface_core_scale,
-        panel_left_knot, panel_vehicle, control_b, normal_b, eval_b, grad_w, vehicle_panel_start,
+        panel_left_knot, panel_vehicle, control_b, normal_b, aic_static, eval_b, grad_w, vehicle_panel_start,
         cutoff, core_mode, aic_core_mode, nu,
         dt, v, pJ, pCT, pCP, eR, eM, eP, eF, tT, tP, tR, tA, lim,
         out_state, out_status,
@@ -166,7 +166,7 @@ def _make_batch(parallel: bool):
             step_one(state[b], controls[b], ambient[b], turb[b], held_wind[b], held_omega[b], gamma[b], update_wake,
                      wake_on, wing_origin_b, knot_x1_b, knot_x3_b, knot_vehicle, knot_surface,
                      surface_origin_b, surface_vehicle, surface_knot_start, surface_panel_start, surface_core_scale,
-                     panel_left_knot, panel_vehicle, control_b, normal_b, eval_b, grad_w, vehicle_panel_start,
+                     panel_left_knot, panel_vehicle, control_b, normal_b, aic_static, eval_b, grad_w, vehicle_panel_start,
                      cutoff, core_mode, aic_core_mode, nu,
                      dt, v, pJ, pCT, pCP, eR, eM, eP, eF, tT, tP, tR, tA, lim,
                      out_state[b], out_status[b])
@@ -199,7 +199,7 @@ def _make_many(parallel: bool):
         wing_origin_b,
         knot_x1_b, knot_x3_b, knot_vehicle, knot_surface,
         surface_origin_b, surface_vehicle, surface_knot_start, surface_panel_start, surface_core_scale,
-        panel_left_knot, panel_vehicle, control_b, normal_b, eval_b, grad_w, vehicle_panel_start,
+        panel_left_knot, panel_vehicle, control_b, normal_b, aic_static, eval_b, grad_w, vehicle_panel_start,
         cutoff, core_mode, aic_core_mode, nu,
         dt, v, pJ, pCT, pCP, eR, eM, eP, eF, tT, tP, tR, tA, lim,
         out_state, out_status, out_status_any, out_min_sep,
@@ -219,7 +219,7 @@ def _make_many(parallel: bool):
                 step_one(cur, controls[b], ambient_seq[s, b], turb_seq[s, b], held_wind[b], held_omega[b], gamma[b],
                          update, wake_on, wing_origin_b, knot_x1_b, knot_x3_b, knot_vehicle, knot_surface,
                          surface_origin_b, surface_vehicle, surface_knot_start, surface_panel_start, surface_core_scale,
-                         panel_left_knot, panel_vehicle, control_b, normal_b, eval_b, grad_w, vehicle_panel_start,
+                         panel_left_knot, panel_vehicle, control_b, normal_b, aic_static, eval_b, grad_w, vehicle_panel_start,
                          cutoff, core_mode, aic_core_mode, nu,
                          dt, v, pJ, pCT, pCP, eR, eM, eP, eF, tT, tP, tR, tA, lim,
                          nxt, st)

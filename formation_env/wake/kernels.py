@@ -217,10 +217,46 @@ def core_radius(px, py, pz, origin, s, airspeed_src, surface_core_scale, core_mo
 
 
 @_jit
+def static_aic(knot_x1_b, knot_x3_b, knot_vehicle, knot_surface, surface_knot_start, panel_left_knot, panel_vehicle,
+               control_b, normal_b, cutoff):
+    """The part of the AIC that a rigid vehicle's own bound and chordwise branches contribute to its
+    own control points: constant in body axes (only the trailing legs follow alpha and beta), so
+    it is computed once per make-up. Entries between different vehicles are zero."""
+    n_panels = panel_left_knot.shape[0]
+    n_knots = knot_x1_b.shape[0]
+    out = np.zeros((n_panels, n_panels))
+    bound_dir = np.empty((n_knots, 3))
+    chord_dir = np.empty((n_knots, 3))
+    branch_directions(knot_x1_b, knot_x3_b, knot_surface, surface_knot_start, bound_dir, chord_dir)
+    r1 = np.empty((n_knots, 3))
+    r3 = np.empty((n_knots, 3))
+    inv1 = np.empty(n_knots)
+    inv3 = np.empty(n_knots)
+    cw = np.empty(n_knots)
+    for j in range(n_panels):
+        vj = panel_vehicle[j]
+        c = control_b[j]
+        n = normal_b[j]
+        point_to_knots(c[0], c[1], c[2], knot_x1_b, knot_x3_b, 0, n_knots, r1, inv1, r3, inv3)
+        for k in range(n_knots):
+            sx, sy, sz = branch(chord_dir[k, 0], chord_dir[k, 1], chord_dir[k, 2], r3[k, 0], r3[k, 1], r3[k, 2], inv3[k],
+                                r1[k, 0], r1[k, 1], r1[k, 2], inv1[k], cutoff)
+            cw[k] = sx * n[0] + sy * n[1] + sz * n[2]
+        for p in range(n_panels):
+            if panel_vehicle[p] != vj:
+                continue
+            k = panel_left_knot[p]
+            bx, by, bz = branch(bound_dir[k, 0], bound_dir[k, 1], bound_dir[k, 2], r1[k, 0], r1[k, 1], r1[k, 2], inv1[k],
+                                r1[k + 1, 0], r1[k + 1, 1], r1[k + 1, 2], inv1[k + 1], cutoff)
+            out[j, p] = cw[k] + bx * n[0] + by * n[1] + bz * n[2] - cw[k + 1]
+    return out
+
+
+@_jit
 def assemble_and_solve(
     x1, x3, bound_dir, chord_dir, trail, vel, rot, pos, origin, airspeed,
     knot_vehicle, knot_surface, surface_core_scale, panel_left_knot, panel_vehicle,
-    control_b, normal_b, cutoff, aic_core_mode, nu, aic, gamma, r1, inv1, r3, inv3,
+    control_b, normal_b, aic_static, cutoff, aic_core_mode, nu, aic, gamma, r1, inv1, r3, inv3,
 ):
     """Build the AIC over every panel of every vehicle and solve for the circulations (4.25-4.69).
 
@@ -228,19 +264,20 @@ def assemble_and_solve(
     All branches use the plain Biot-Savart law with the Eq. 4.31 cutoff (the thesis), except that
     ``aic_core_mode`` != CORE_NONE gives the *other* vehicles' trailing legs the viscous core of the
     field law, so that a leg passing a control point does not produce a near-singular response.
+    A vehicle's own bound and chordwise branches come from ``aic_static`` (see :func:`static_aic`).
     """
     n_panels = panel_left_knot.shape[0]
     n_knots = x1.shape[0]
     cp = np.empty(3)
     nrm = np.empty(3)
-    wl = np.empty(n_knots)
+    lw = np.empty(n_knots)  # trailing leg . n
+    cw = np.empty(n_knots)  # chordwise branch . n (other vehicles' knots only)
     for j in range(n_panels):
         vj = panel_vehicle[j]
         to_ned(rot[vj], pos[vj], control_b[j], cp)
         for i in range(3):
             nrm[i] = rot[vj, 0, i] * normal_b[j, 0] + rot[vj, 1, i] * normal_b[j, 1] + rot[vj, 2, i] * normal_b[j, 2]
         point_to_knots(cp[0], cp[1], cp[2], x1, x3, 0, n_knots, r1, inv1, r3, inv3)
-        # L-line of every knot (inf -> X3 -> X1), projected on the normal.
         for k in range(n_knots):
             src = knot_vehicle[k]
             t = trail[src]
@@ -248,14 +285,19 @@ def assemble_and_solve(
             if aic_core_mode != CORE_NONE and src != vj:
                 rc = core_radius(cp[0], cp[1], cp[2], origin, knot_surface[k], airspeed[src], surface_core_scale, aic_core_mode, nu)
             lx, ly, lz = leg(t[0], t[1], t[2], r3[k, 0], r3[k, 1], r3[k, 2], inv3[k], cutoff, rc)
-            sx, sy, sz = branch(chord_dir[k, 0], chord_dir[k, 1], chord_dir[k, 2], r3[k, 0], r3[k, 1], r3[k, 2], inv3[k],
-                                r1[k, 0], r1[k, 1], r1[k, 2], inv1[k], cutoff)
-            wl[k] = (sx - lx) * nrm[0] + (sy - ly) * nrm[1] + (sz - lz) * nrm[2]
+            lw[k] = lx * nrm[0] + ly * nrm[1] + lz * nrm[2]
+            if src != vj:
+                sx, sy, sz = branch(chord_dir[k, 0], chord_dir[k, 1], chord_dir[k, 2], r3[k, 0], r3[k, 1], r3[k, 2],
+                                    inv3[k], r1[k, 0], r1[k, 1], r1[k, 2], inv1[k], cutoff)
+                cw[k] = sx * nrm[0] + sy * nrm[1] + sz * nrm[2]
         for p in range(n_panels):
             k = panel_left_knot[p]
-            bx, by, bz = branch(bound_dir[k, 0], bound_dir[k, 1], bound_dir[k, 2], r1[k, 0], r1[k, 1], r1[k, 2], inv1[k],
-                                r1[k + 1, 0], r1[k + 1, 1], r1[k + 1, 2], inv1[k + 1], cutoff)
-            aic[j, p] = wl[k] + bx * nrm[0] + by * nrm[1] + bz * nrm[2] - wl[k + 1]
+            if panel_vehicle[p] == vj:
+                aic[j, p] = aic_static[j, p] - lw[k] + lw[k + 1]
+            else:
+                bx, by, bz = branch(bound_dir[k, 0], bound_dir[k, 1], bound_dir[k, 2], r1[k, 0], r1[k, 1], r1[k, 2],
+                                    inv1[k], r1[k + 1, 0], r1[k + 1, 1], r1[k + 1, 2], inv1[k + 1], cutoff)
+                aic[j, p] = (cw[k] - lw[k]) + bx * nrm[0] + by * nrm[1] + bz * nrm[2] - (cw[k + 1] - lw[k + 1])
         gamma[j] = vel[vj, 0] * nrm[0] + vel[vj, 1] * nrm[1] + vel[vj, 2] * nrm[2]
     lu_solve_inplace(aic, gamma)
 
@@ -340,7 +382,7 @@ def evaluate_one(
     pos, euler, airspeed, alpha, beta,
     knot_x1_b, knot_x3_b, knot_vehicle, knot_surface,
     surface_origin_b, surface_vehicle, surface_knot_start, surface_panel_start, surface_core_scale,
-    panel_left_knot, panel_vehicle, control_b, normal_b, eval_b, grad_w, vehicle_panel_start,
+    panel_left_knot, panel_vehicle, control_b, normal_b, aic_static, eval_b, grad_w, vehicle_panel_start,
     cutoff, core_mode, aic_core_mode, nu,
     gamma_out, vpts_out, wind_ned_out, wind_b_out, omega_b_out, omega_ned_out,
 ):
@@ -353,7 +395,7 @@ def evaluate_one(
         surface_origin_b, surface_vehicle, surface_knot_start)
     aic = np.empty((n_panels, n_panels))
     assemble_and_solve(x1, x3, bound_dir, chord_dir, trail, vel, rot, pos, origin, airspeed, knot_vehicle, knot_surface,
-                       surface_core_scale, panel_left_knot, panel_vehicle, control_b, normal_b, cutoff,
+                       surface_core_scale, panel_left_knot, panel_vehicle, control_b, normal_b, aic_static, cutoff,
                        aic_core_mode, nu, aic, gamma_out, r1, inv1, r3, inv3)
     pt = np.empty(3)
     for j in range(n_panels):
@@ -405,7 +447,7 @@ def _make_batch(parallel: bool):
         pos, euler, airspeed, alpha, beta,
         knot_x1_b, knot_x3_b, knot_vehicle, knot_surface,
         surface_origin_b, surface_vehicle, surface_knot_start, surface_panel_start, surface_core_scale,
-        panel_left_knot, panel_vehicle, control_b, normal_b, eval_b, grad_w, vehicle_panel_start,
+        panel_left_knot, panel_vehicle, control_b, normal_b, aic_static, eval_b, grad_w, vehicle_panel_start,
         cutoff, core_mode, aic_core_mode, nu,
         gamma_out, vpts_out, wind_ned_out, wind_b_out, omega_b_out, omega_ned_out,
     ):
@@ -414,7 +456,7 @@ def _make_batch(parallel: bool):
                 pos[b], euler[b], airspeed[b], alpha[b], beta[b],
                 knot_x1_b, knot_x3_b, knot_vehicle, knot_surface,
                 surface_origin_b, surface_vehicle, surface_knot_start, surface_panel_start, surface_core_scale,
-                panel_left_knot, panel_vehicle, control_b, normal_b, eval_b, grad_w, vehicle_panel_start,
+                panel_left_knot, panel_vehicle, control_b, normal_b, aic_static, eval_b, grad_w, vehicle_panel_start,
                 cutoff, core_mode, aic_core_mode, nu,
                 gamma_out[b], vpts_out[b], wind_ned_out[b], wind_b_out[b], omega_b_out[b], omega_ned_out[b],
             )

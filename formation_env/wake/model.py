@@ -117,6 +117,8 @@ class WakeModel:
         t = self.template
         self.eval_b = t.control_b if eval_points == "control" else t.quarter_chord_b
         self.grad_w = gradient_weights(t, self.eval_b, rotational, span_tol)
+        self.aic_static = kernels.static_aic(t.knot_x1_b, t.knot_x3_b, t.knot_vehicle, t.knot_surface, t.surface_knot_start,
+                                             t.panel_left_knot, t.panel_vehicle, t.control_b, t.normal_b, t.cutoff_m)
         self._core_mode = CORES[core]
         self._geometry_args = (
             t.knot_x1_b, t.knot_x3_b, t.knot_vehicle, t.knot_surface,
@@ -150,7 +152,7 @@ class WakeModel:
         kernel(
             state.position_ned, state.euler_rad, state.airspeed_mps, state.alpha_rad, state.beta_rad,
             *self._geometry_args[:4], *self._geometry_args[4:],
-            t.panel_left_knot, t.panel_vehicle, t.control_b, t.normal_b, self.eval_b, self.grad_w,
+            t.panel_left_knot, t.panel_vehicle, t.control_b, t.normal_b, self.aic_static, self.eval_b, self.grad_w,
             t.vehicle_panel_start, t.cutoff_m, self._core_mode,
             self._core_mode if self.viscous_aic else kernels.CORE_NONE, self.kinematic_viscosity,
             gamma, vpts, *out,
