@@ -46,10 +46,11 @@ def _single_env(mode: str, decisions: int, repeats: int) -> dict:
             "uav_physics_steps_per_s": 2 * physics, "real_time_factor": physics * env.engine.dt}
 
 
-def _vector(n_formations: int, mode: str, decisions: int, repeats: int) -> dict:
+def _vector(n_formations: int, mode: str, decisions: int, repeats: int, wake_update_every: int = 1) -> dict:
     from .vector import FormationVecEnv
 
-    venv = FormationVecEnv(n_formations, scenario="formation_keeping", learning="all", action_mode=mode, seed=0)
+    venv = FormationVecEnv(n_formations, scenario="formation_keeping", learning="all", action_mode=mode, seed=0,
+                           wake_update_every=wake_update_every)
     venv.reset()
     act = np.zeros((venv.num_envs, 4), np.float32)
 
@@ -61,7 +62,8 @@ def _vector(n_formations: int, mode: str, decisions: int, repeats: int) -> dict:
     t = _median(run, repeats)
     sub = venv.batch.core.substeps
     physics = n_formations * decisions * sub / t
-    return {"formations": n_formations, "action_mode": mode, "formation_physics_steps_per_s": physics,
+    return {"formations": n_formations, "action_mode": mode, "wake_hz": 50.0 / wake_update_every,
+            "formation_physics_steps_per_s": physics,
             "uav_physics_steps_per_s": 2 * physics, "real_time_factor_per_formation": decisions * sub * 0.02 / t,
             "agent_decisions_per_s": venv.num_envs * decisions / t}
 
@@ -76,6 +78,7 @@ def run_benchmarks(quick: bool = False) -> dict:
     for n in sizes:
         out["vector_env"].append(_vector(n, "surfaces", 5 if n >= 1024 else 20, reps))
     if not quick:
+        out["vector_env"].append(_vector(1024, "surfaces", 5, reps, wake_update_every=2))
         out["vector_env"].append(_vector(64, "residual", 10, reps))
         out["vector_env"].append(_vector(1024, "residual", 3, 3))
     return out

@@ -68,7 +68,8 @@ class FormationEpisode:
         self.surface_limit_rad = float(self.fcs.config.surface_limit_rad)
         self.throttle_limits = tuple(float(x) for x in self.fcs.config.throttle_limits)
         self._fcs_observation, self._slot_demand, self._track_to_ned = fcs_observation, slot_demand, track_frame_offset_to_ned
-        self.sim = FormationSimulator(self.n_vehicles, self.batch_size, dt=sc.dt, wake=WakeConfig(enabled=self.wake))
+        self.sim = FormationSimulator(self.n_vehicles, self.batch_size, dt=sc.dt,
+                                      wake=WakeConfig(enabled=self.wake, update_every=config.wake_update_every))
         b, v = self.batch_size, self.n_vehicles
         self.state = np.zeros((b, v, N_STATES))
         self.cstate = np.zeros((b * v, self.fcs.initial_state(1).shape[1]))
@@ -144,11 +145,8 @@ class FormationEpisode:
 
     def ambient_wind(self) -> np.ndarray:
         """(B, V, 3) ambient wind (scenario gusts + steady wind), NED m/s."""
-        b, v = self.batch_size, self.n_vehicles
-        w = np.empty((b, v, 3))
-        for i in range(b):
-            w[i] = self.scenario.ambient_wind_ned(float(self.time_s[i])) + self.steady_wind[i]
-        return w
+        w = self.scenario.ambient_wind_ned(self.time_s) + self.steady_wind
+        return np.broadcast_to(w[:, None, :], (self.batch_size, self.n_vehicles, 3)).copy()
 
     def turbulence_body(self) -> np.ndarray:
         out = np.zeros((self.batch_size, self.n_vehicles, 3))
@@ -183,6 +181,18 @@ class FormationEpisode:
         return self.position_demand
 
     def _update_demands(self, vel_ned: np.ndarray) -> None:
+        if not self.config.randomisation.any_manoeuvre:
+            # Vectorised over formations (elementwise the same arithmetic as the scalar path below).
+            t = self.time_s
+            pd0, vd0 = self.scenario.reference(t)
+            self.position_demand[:, 0], self.velocity_demand[:, 0] = pd0, vd0
+            chi = np.arctan2(vd0[:, 1], vd0[:, 0]) if self.scenario.slot_frame == "leader_demand" else None
+            for j, slot in enumerate(self.scenario.slots):
+                off, rate = slot.offset_and_rate(t)
+                p, w = self._slot_demand(self.state[:, 0, 10:13], vel_ned[:, 0], off + self.slot_jitter[:, j + 1], rate,
+                                         track_angle_rad=chi)
+                self.position_demand[:, j + 1], self.velocity_demand[:, j + 1] = p, w
+            return
         for i in range(self.batch_size):
             t = float(self.time_s[i])
             self.position_demand[i, 0], self.velocity_demand[i, 0] = self._reference(i, t)
@@ -203,11 +213,10 @@ class FormationEpisode:
         if target is not None and target.mode == "surfaces" and target.mask.all():
             if target.mapped is None:
                 target.mapped = self._apply_commands(target, self.commands)
-            amb = np.empty((n_steps, b, v, 3))
+            times = (self.step_count[None, :] + np.arange(n_steps)[:, None]) * self.dt  # (S, B)
+            amb = np.broadcast_to((self.scenario.ambient_wind_ned(times) + self.steady_wind)[:, :, None, :], (n_steps, b, v, 3))
             turb = np.zeros((n_steps, b, v, 3))
             for i in range(b):
-                for s in range(n_steps):
-                    amb[s, i] = self.scenario.ambient_wind_ned(float((self.step_count[i] + s) * self.dt)) + self.steady_wind[i]
                 t = self.turbulence[i]
                 if t is not None:
                     turb[0, i] = t.velocity_body

@@ -44,10 +44,13 @@ class SlotSchedule:
             raise ValueError(f"SlotSchedule.span_m must be > 0, got {self.span_m!r}")
         object.__setattr__(self, "keyframes", kf)
 
-    def offset_and_rate(self, t_s: float) -> tuple[np.ndarray, np.ndarray]:
-        """Offset (m, track frame) and its time derivative (m/s) at time ``t_s``."""
+    def offset_and_rate(self, t_s) -> tuple[np.ndarray, np.ndarray]:
+        """Offset (m, track frame) and its time derivative (m/s) at time ``t_s`` (a scalar, or an
+        array of times giving arrays of shape t.shape + (3,); elementwise the same arithmetic)."""
         kf = self.keyframes
         b = self.span_m
+        if np.ndim(t_s) > 0:
+            return self._offset_and_rate_array(np.asarray(t_s, dtype=float))
         if t_s <= kf[0][0]:
             return np.asarray(kf[0][1]) * b, np.zeros(3)
         for (t0, a), (t1, c) in zip(kf, kf[1:]):
@@ -58,6 +61,26 @@ class SlotSchedule:
                 a, c = np.asarray(a) * b, np.asarray(c) * b
                 return a + s * (c - a), ds * (c - a)
         return np.asarray(kf[-1][1]) * b, np.zeros(3)
+
+    def _offset_and_rate_array(self, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        kf = self.keyframes
+        b = self.span_m
+        off = np.empty(t.shape + (3,))
+        rate = np.zeros(t.shape + (3,))
+        done = t <= kf[0][0]
+        off[done] = np.asarray(kf[0][1]) * b
+        for (t0, a), (t1, c) in zip(kf, kf[1:]):
+            m = ~done & (t < t1)
+            if m.any():
+                tau = (t[m] - t0) / (t1 - t0)
+                sv = 0.5 * (1.0 - np.cos(np.pi * tau))
+                ds = 0.5 * np.pi * np.sin(np.pi * tau) / (t1 - t0)
+                a_m, c_m = np.asarray(a) * b, np.asarray(c) * b
+                off[m] = a_m + sv[:, None] * (c_m - a_m)
+                rate[m] = ds[:, None] * (c_m - a_m)
+            done |= m
+        off[~done] = np.asarray(kf[-1][1]) * b
+        return off, rate
 
 
 @dataclass(frozen=True)
@@ -114,13 +137,20 @@ class Scenario:
             p[i + 1] += s.offset_and_rate(0.0)[0]
         return p
 
-    def reference(self, t_s: float) -> tuple[np.ndarray, np.ndarray]:
-        """Vehicle 0's demanded position and velocity (NED) at ``t_s``: straight and level, north."""
+    def reference(self, t_s) -> tuple[np.ndarray, np.ndarray]:
+        """Vehicle 0's demanded position and velocity (NED) at ``t_s``: straight and level, north.
+        An array of times gives arrays of shape t.shape + (3,)."""
+        if np.ndim(t_s) > 0:
+            t = np.asarray(t_s, dtype=float)
+            pos = np.stack([self.airspeed_mps * t, np.zeros_like(t), np.full_like(t, -self.altitude_m)], axis=-1)
+            vel = np.broadcast_to(np.array([self.airspeed_mps, 0.0, 0.0]), t.shape + (3,)).copy()
+            return pos + np.asarray(self.reference_offset_ned), vel
         pos = np.array([self.airspeed_mps * t_s, 0.0, -self.altitude_m]) + np.asarray(self.reference_offset_ned)
         return pos, np.array([self.airspeed_mps, 0.0, 0.0])
 
-    def ambient_wind_ned(self, t_s: float) -> np.ndarray:
-        w = np.zeros(3)
+    def ambient_wind_ned(self, t_s) -> np.ndarray:
+        """Ambient (gust) wind, NED m/s, at ``t_s`` (scalar -> (3,), array -> t.shape + (3,))."""
+        w = np.zeros(np.shape(t_s) + (3,))
         for g in self.gusts:
             w = w + g.wind_ned(t_s)
         return w

@@ -78,6 +78,8 @@ def test_bad_input_raises_clear_errors():
         formation_env.parallel_env("formation_keeping", wingspan=3)
     with pytest.raises(ValueError, match="control_hz"):
         formation_env.parallel_env("formation_keeping", control_hz=7.0)
+    with pytest.raises(ValueError, match="wake_update_every"):
+        formation_env.parallel_env("formation_keeping", wake_update_every=0)
     with pytest.raises(ValueError, match="turbulence_sigma_mps"):
         Randomisation(turbulence_sigma_mps=-1.0)
     with pytest.raises(ValueError, match="learning"):
