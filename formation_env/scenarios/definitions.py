@@ -185,6 +185,17 @@ SCENARIOS: dict[str, Scenario] = {
         slots=(SlotSchedule(((0.0, (-3.0, 1.0, 0.2)), (10.0, (-3.0, 1.0, 0.2)), (15.0, (-3.0, 1.0, 1.0)),
                              (20.0, (-3.0, 1.0, 1.0)), (35.0, (3.0, 1.0, 1.0)), (45.0, (3.0, 1.0, 1.0)),
                              (50.0, (3.0, 1.0, -0.2)))),)),
+    # N >= 3 formations (not in the thesis): followers 2 spans apart along the track, 0.9 span
+    # apart laterally (wing-tip overlap of 0.1 span, near the lift-gain optimum of the chapter 5
+    # study) and 0.1 span lower each, so every follower flies in the upwash of the one ahead.
+    "echelon": Scenario(
+        "echelon", "right echelon of 3: each follower 2 spans behind, 0.9 span starboard of and 0.1 span "
+        "below the UAV ahead", duration_s=60.0,
+        slots=(SlotSchedule(((0.0, (-2.0, 0.9, 0.1)),)), SlotSchedule(((0.0, (-4.0, 1.8, 0.2)),)))),
+    "vee": Scenario(
+        "vee", "vee of 5: two echelons of 2 behind the leader, starboard and port", duration_s=60.0,
+        slots=(SlotSchedule(((0.0, (-2.0, 0.9, 0.1)),)), SlotSchedule(((0.0, (-2.0, -0.9, 0.1)),)),
+               SlotSchedule(((0.0, (-4.0, 1.8, 0.2)),)), SlotSchedule(((0.0, (-4.0, -1.8, 0.2)),)))),
 }
 
 
