@@ -12,7 +12,7 @@ import argparse
 import importlib
 import sys
 
-COMMANDS = ("verify", "bench", "demo", "trim", "modes", "run", "report", "replay")
+COMMANDS = ("verify", "bench", "demo", "trim", "modes", "run", "report", "replay", "train", "evaluate")
 
 
 def build_parser() -> argparse.ArgumentParser:

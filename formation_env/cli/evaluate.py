@@ -1,0 +1,64 @@
+"""``formation-env evaluate``: compare policies (SB3 zips and/or the thesis PID) on held-out seeds
+with the wake and Dryden turbulence on; writes results.json, results.md and comparison plots."""
+
+from __future__ import annotations
+
+import time
+
+
+def _nonneg_float(text: str) -> float:
+    import argparse
+    import math
+
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"must be a number >= 0, got {text!r}") from None
+    if not math.isfinite(value) or value < 0:
+        raise argparse.ArgumentTypeError(f"must be a finite number >= 0, got {text!r}")
+    return value
+
+
+def register(sub) -> None:
+    from train.config import ACTION_MODES, TEST_SEED_BASE
+
+    from ..scenarios import scenario_names
+
+    p = sub.add_parser("evaluate", help="evaluate policies against the PID on held-out seeds (wake + turbulence)")
+    p.add_argument("--policy", action="append", required=True,
+                   help="an SB3 .zip or 'pid'; repeat to compare several side by side")
+    p.add_argument("--scenario", required=True, help=f"one of {scenario_names()}")
+    p.add_argument("--episodes", type=int, default=20, help="episodes per policy (default 20)")
+    p.add_argument("--seeds", type=int, nargs="+", default=None,
+                   help=f"one seed (the first of --episodes consecutive ones) or one per episode "
+                        f"(default {TEST_SEED_BASE}.., never used in training)")
+    p.add_argument("--turbulence", type=_nonneg_float, default=1.0, help="Dryden sigma, m/s, every axis (default 1)")
+    p.add_argument("--no-wake", action="store_true", help="switch the ELL wake off (default on)")
+    p.add_argument("--benefit", action="store_true", help="also compute the ELL induced-drag saving (slow)")
+    p.add_argument("--action-mode", default=None, choices=ACTION_MODES,
+                   help="action mode of the zips when no sidecar JSON / config.yaml says it")
+    p.add_argument("--duration", type=float, default=None, help="override the episode length, s")
+    p.add_argument("--out", default=None, help="output directory (default runs/eval-<scenario>-<timestamp>)")
+    p.add_argument("--overwrite", action="store_true", help="allow an existing non-empty output directory")
+    p.add_argument("--no-plots", action="store_true", help="write only results.json and results.md")
+    p.set_defaults(func=run)
+
+
+def run(args) -> int:
+    from train.evaluate import evaluate
+
+    if args.episodes < 1:
+        raise ValueError(f"--episodes must be >= 1, got {args.episodes}")
+    if args.seeds and len(args.seeds) > 1 and len(args.seeds) != args.episodes:
+        args.episodes = len(args.seeds)
+    out = args.out or f"runs/eval-{args.scenario}-{time.strftime('%Y%m%d-%H%M%S')}"
+    rep = evaluate(args.policy, scenario=args.scenario, episodes=args.episodes, seeds=args.seeds,
+                   turbulence_sigma_mps=args.turbulence, wake=not args.no_wake, compute_benefit=args.benefit,
+                   action_mode=args.action_mode, out_dir=out, overwrite=args.overwrite, plots=not args.no_plots,
+                   duration_s=args.duration, log=print)
+    print(rep["table_markdown"])
+    print(f"wrote {out}/results.json, results.md" + ("" if args.no_plots else ", metrics.png, slot_error.png"))
+    return 0
+
+
+__all__ = ["register", "run"]
