@@ -9,6 +9,8 @@ formation_env/FormationKeeping-v0        formation_keeping  follower (uav_1)
 formation_env/Reconfiguration-v0         reconfiguration    follower (uav_1)
 formation_env/Gust-v0                    gust               the single UAV (uav_0)
 formation_env/Tracking-v0                tracking           the single UAV (uav_0)
+formation_env/Echelon-v0                 echelon            first follower (uav_1)
+formation_env/Vee-v0                     vee                first follower (uav_1)
 =======================================  =================  ==========================
 
 Keyword arguments of ``gymnasium.make`` go to :class:`~formation_env.envs.config.EnvConfig`
@@ -31,6 +33,8 @@ GYM_IDS = {
     "formation_env/Reconfiguration-v0": ("reconfiguration", 1),
     "formation_env/Gust-v0": ("gust", 0),
     "formation_env/Tracking-v0": ("tracking", 0),
+    "formation_env/Echelon-v0": ("echelon", 1),
+    "formation_env/Vee-v0": ("vee", 1),
 }
 
 
