@@ -5,7 +5,7 @@ PY      = $(VENV)/bin/python
 STAMP   = $(VENV)/.installed-$(shell cat pyproject.toml | cksum | cut -d' ' -f1)
 OUT    ?=
 
-.PHONY: demo test bench verify clean
+.PHONY: demo test bench verify report clean install
 
 $(VENV)/bin/python:
 	$(PYTHON) -m venv $(VENV)
@@ -30,6 +30,9 @@ bench: $(STAMP)
 
 verify: $(STAMP)
 	$(VENV)/bin/formation-env verify
+
+report: $(STAMP)
+	$(VENV)/bin/formation-env report
 
 clean:
 	rm -rf $(VENV) build *.egg-info
