@@ -21,15 +21,14 @@ from pathlib import Path
 
 import numpy as np
 
-from formation_env.aircraft import air_data_of, trim
+from formation_env.aircraft import air_data_of
 from formation_env.aircraft.envelope import describe_status
 from formation_env.atmosphere.wind import WindInput
 from formation_env.scenarios import Scenario, get_scenario
-from formation_env.sim import FormationSimulator, WakeConfig
+from formation_env.sim import WakeConfig
 
-from .fcs import PIDFlightControl
 from .fcs.tracker import track_errors
-from .observation import fcs_observation, slot_demand
+from .observation import fcs_observation
 
 __all__ = ["ScenarioRun", "run_scenario", "scenario_metrics", "run_scenario_to_dir"]
 
@@ -46,39 +45,23 @@ class ScenarioRun:
     status_message: str
 
 
-def _demands(sc: Scenario, t: float, state: np.ndarray, vel_ned: np.ndarray):
-    v = sc.n_vehicles
-    pd = np.empty((v, 3))
-    vd = np.empty((v, 3))
-    pd[0], vd[0] = sc.reference(t)
-    for i, slot in enumerate(sc.slots):
-        off, rate = slot.offset_and_rate(t)
-        p, w = slot_demand(state[0, 10:13], vel_ned[0], off, rate,
-                           track_angle_rad=np.arctan2(vd[0, 1], vd[0, 0]) if sc.slot_frame == "leader_demand" else None)
-        pd[i + 1], vd[i + 1] = p, w
-    return pd, vd
-
-
 def run_scenario(scenario: str | Scenario, wake: bool | None = None, duration_s: float | None = None,
                  wake_config: WakeConfig | None = None) -> ScenarioRun:
-    """Fly ``scenario`` (a name or a :class:`Scenario`); ``wake`` None uses its default."""
+    """Fly ``scenario`` (a name or a :class:`Scenario`) with the PID baseline on every aircraft;
+    ``wake`` None uses its default. The physics step is the environments' episode engine (so an
+    env flown by the PID gives exactly these numbers); this function records the histories."""
+    from formation_env.envs.config import EnvConfig
+    from formation_env.envs.engine import FormationEpisode
+
     sc = get_scenario(scenario) if isinstance(scenario, str) else scenario
     if not isinstance(sc, Scenario):
         raise ValueError(f"scenario must be a name or a Scenario, got {type(scenario).__name__}")
     wake = sc.wake_default if wake is None else bool(wake)
     if duration_s is not None and not (math.isfinite(duration_s) and duration_s > 0):
         raise ValueError(f"duration_s must be finite and > 0, got {duration_s!r}")
-    n_steps = sc.n_steps if duration_s is None else int(round(duration_s / sc.dt))
-    v = sc.n_vehicles
-    t0 = trim(sc.airspeed_mps, sc.altitude_m)
-    fcs = PIDFlightControl.from_trim(t0, dt=sc.dt)
-    cfg = wake_config if wake_config is not None else WakeConfig()
-    cfg = WakeConfig(**{**cfg.__dict__, "enabled": wake})
-    sim = FormationSimulator(v, 1, dt=sc.dt, wake=cfg)
-    state = np.repeat(t0.state, v, axis=0)
-    state[:, 10:13] = sc.start_position_ned()
-    cstate = fcs.initial_state(v)
-    induced = np.zeros((v, 3))
+    eng = FormationEpisode(EnvConfig(scenario=sc, wake=wake, duration_s=duration_s), 1, wake_config=wake_config)
+    eng.reset(seeds=[0])  # nothing is randomised: the seed is not used
+    n_steps, v = eng.n_steps, sc.n_vehicles
     names3 = ("position_ned", "velocity_ned", "euler", "rates_body", "controls", "induced_wind_ned",
               "induced_omega_body", "position_demand_ned", "ambient_wind_ned")
     h = {k: np.full((n_steps, v, 4 if k == "controls" else 3), np.nan) for k in names3}
@@ -88,28 +71,25 @@ def run_scenario(scenario: str | Scenario, wake: bool | None = None, duration_s:
     completed, message = True, "completed"
     for k in range(n_steps):
         t = k * sc.dt
-        amb = np.broadcast_to(sc.ambient_wind_ned(t), (v, 3))
-        obs0 = fcs_observation(state, np.zeros(3), np.zeros(3), WindInput(wind_ned=amb + induced))
-        pd, vd = _demands(sc, t, state, obs0["velocity_ned"])
-        obs = dict(obs0, position_demand_ned=pd, velocity_demand_ned=vd)
-        cmd, cstate = fcs.act(obs, cstate)
-        res = sim.step(state[None], cmd[None], amb[None])
-        induced = res.induced_wind_ned[0]
+        state, amb = eng.state[0].copy(), eng.ambient_wind()[0]
+        obs = fcs_observation(state, np.zeros(3), np.zeros(3), WindInput(wind_ned=amb + eng.induced[0]))
+        eng.physics_step(None)
+        cmd, induced, status = eng.commands[0], eng.induced[0], eng.status[0]
+        pd, vd = eng.position_demand[0], eng.velocity_demand[0]  # the demands of this step
         ad = air_data_of(state, WindInput(wind_ned=amb + induced))
         atd, otd, _, _ = track_errors(obs["position_ned"], obs["velocity_ned"], pd, vd)
         h["position_ned"][k], h["velocity_ned"][k], h["euler"][k] = obs["position_ned"], obs["velocity_ned"], obs["euler"]
         h["rates_body"][k], h["controls"][k], h["induced_wind_ned"][k] = obs["rates_body"], cmd, induced
-        h["induced_omega_body"][k], h["position_demand_ned"][k], h["ambient_wind_ned"][k] = res.induced_omega_body[0], pd, amb
+        h["induced_omega_body"][k], h["position_demand_ned"][k], h["ambient_wind_ned"][k] = eng.omega[0], pd, amb
         h["airspeed"][k], h["alpha"][k], h["beta"][k] = ad["airspeed_raw"], ad["alpha_raw"], ad["beta_raw"]
         h["along_track"][k], h["off_track"][k] = atd, otd
         h["altitude_error"][k] = -(obs["position_ned"][:, 2] - pd[:, 2])
         h["track_angle"][k] = np.arctan2(obs["velocity_ned"][:, 1], obs["velocity_ned"][:, 0])
-        h["status"][k] = res.status[0]
-        state = res.state[0]
-        if np.any(res.status[0] != 0):
+        h["status"][k] = status
+        if np.any(status != 0):
             completed = False
-            bad = int(np.nonzero(res.status[0])[0][0])
-            message = f"vehicle {bad} left the envelope at t = {t + sc.dt:.2f} s ({describe_status(res.status[0][bad])})"
+            bad = int(np.nonzero(status)[0][0])
+            message = f"vehicle {bad} left the envelope at t = {t + sc.dt:.2f} s ({describe_status(status[bad])})"
             time, h = time[:k + 1], {key: val[:k + 1] for key, val in h.items()}
             break
     return ScenarioRun(sc, wake, time, h, completed, message)

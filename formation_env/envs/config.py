@@ -78,7 +78,7 @@ class Randomisation:
 class EnvConfig:
     """Options of the formation environments.
 
-    scenario: a name from :func:`formation_env.scenarios.scenario_names`.
+    scenario: a name from :func:`formation_env.scenarios.scenario_names`, or a Scenario object.
     learning: which UAVs are agents: "all", "followers" (vehicle 0 flies the PID baseline on its
         path: a scripted leader) or a tuple of vehicle indices.
     action_mode: "surfaces" | "residual" | "setpoints" (see :mod:`formation_env.envs.actions`).
@@ -94,7 +94,7 @@ class EnvConfig:
         about twice as fast; the induced wind is held in between).
     """
 
-    scenario: str = "formation_keeping"
+    scenario: object = "formation_keeping"  # a scenario name or a formation_env.scenarios.Scenario
     learning: str | tuple = "all"
     action_mode: str = "surfaces"
     control_hz: float = 10.0
@@ -108,9 +108,9 @@ class EnvConfig:
     randomisation: Randomisation = field(default_factory=Randomisation)
 
     def __post_init__(self) -> None:
-        from ..scenarios import scenario_names
+        from ..scenarios import Scenario, scenario_names
 
-        if self.scenario not in scenario_names():
+        if not isinstance(self.scenario, Scenario) and self.scenario not in scenario_names():
             raise ValueError(f"EnvConfig: unknown scenario {self.scenario!r}; available: {scenario_names()}")
         if self.action_mode not in ACTION_MODES:
             raise ValueError(f"EnvConfig: action_mode must be one of {ACTION_MODES}, got {self.action_mode!r}")

@@ -48,14 +48,14 @@ class ActionTarget:
 class FormationEpisode:
     """B formations of the scenario's V UAVs. ``reset(seeds)`` then ``physics_step(target)``."""
 
-    def __init__(self, config: EnvConfig, batch_size: int = 1) -> None:
+    def __init__(self, config: EnvConfig, batch_size: int = 1, wake_config: WakeConfig | None = None) -> None:
         from agents.fcs import PIDFlightControl  # the baseline lives in agents/ (imported lazily)
         from agents.observation import fcs_observation, slot_demand, track_frame_offset_to_ned
 
         if not isinstance(config, EnvConfig):
             raise ValueError(f"FormationEpisode: config must be an EnvConfig, got {type(config).__name__}")
         self.config = config
-        self.scenario: Scenario = get_scenario(config.scenario)
+        self.scenario: Scenario = config.scenario if isinstance(config.scenario, Scenario) else get_scenario(config.scenario)
         sc = self.scenario
         self.batch_size = int(batch_size)
         self.n_vehicles = sc.n_vehicles
@@ -68,8 +68,11 @@ class FormationEpisode:
         self.surface_limit_rad = float(self.fcs.config.surface_limit_rad)
         self.throttle_limits = tuple(float(x) for x in self.fcs.config.throttle_limits)
         self._fcs_observation, self._slot_demand, self._track_to_ned = fcs_observation, slot_demand, track_frame_offset_to_ned
-        self.sim = FormationSimulator(self.n_vehicles, self.batch_size, dt=sc.dt,
-                                      wake=WakeConfig(enabled=self.wake, update_every=config.wake_update_every))
+        # ``wake_config`` overrides the ELL options (core, evaluation points ...); ``config.wake``
+        # and ``config.wake_update_every`` always apply.
+        base = wake_config if wake_config is not None else WakeConfig()
+        self.sim = FormationSimulator(self.n_vehicles, self.batch_size, dt=sc.dt, wake=WakeConfig(
+            **{**base.__dict__, "enabled": self.wake, "update_every": config.wake_update_every}))
         b, v = self.batch_size, self.n_vehicles
         self.state = np.zeros((b, v, N_STATES))
         self.cstate = np.zeros((b * v, self.fcs.initial_state(1).shape[1]))
