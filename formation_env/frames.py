@@ -15,6 +15,7 @@ Every function accepts arrays with any number of leading (batch) axes.
 
 from __future__ import annotations
 
+import numba as nb
 import numpy as np
 
 __all__ = [
@@ -24,6 +25,7 @@ __all__ = [
     "euler_from_quaternion",
     "dcm_body_to_ned_from_quaternion",
     "wind_axes_velocity_body",
+    "quaternion_dcm_terms",
 ]
 
 
@@ -117,3 +119,12 @@ def wind_axes_velocity_body(airspeed: np.ndarray, alpha_rad: np.ndarray, beta_ra
         [airspeed * np.cos(a) * np.cos(b), airspeed * np.sin(b), airspeed * np.sin(a) * np.cos(b)],
         axis=-1,
     )
+
+
+@nb.njit(cache=True, inline="always")
+def quaternion_dcm_terms(e0, ex, ey, ez):
+    """Compiled scalar form of :func:`dcm_body_to_ned_from_quaternion` for the kernels: the nine
+    entries r00, r01, r02, r10, ..., r22 of the body-to-NED matrix (quaternion as stored)."""
+    return (e0 * e0 + ex * ex - ey * ey - ez * ez, 2.0 * (ex * ey - e0 * ez), 2.0 * (ex * ez + e0 * ey),
+            2.0 * (ex * ey + e0 * ez), e0 * e0 - ex * ex + ey * ey - ez * ez, 2.0 * (ey * ez - e0 * ex),
+            2.0 * (ex * ez - e0 * ey), 2.0 * (ey * ez + e0 * ex), e0 * e0 - ex * ex - ey * ey + ez * ez)

@@ -15,6 +15,7 @@ import numba as nb
 import numpy as np
 
 from ..atmosphere.standard import atmosphere_table
+from ..frames import quaternion_dcm_terms
 from .params import AerosondeParams
 
 _jit = nb.njit(cache=True, fastmath=False, error_model="numpy")
@@ -126,16 +127,7 @@ def _atmos(alt, tT, tP, tR, tA):
 @_jit
 def _air(x, wind, v):
     """Raw and clipped air data of one aircraft; wind = [wind_ned(3), turb_body(3), ell_ned(3), ell_rot(3)]."""
-    e0, ex, ey, ez = x[6], x[7], x[8], x[9]
-    r00 = e0 * e0 + ex * ex - ey * ey - ez * ez
-    r01 = 2.0 * (ex * ey - e0 * ez)
-    r02 = 2.0 * (ex * ez + e0 * ey)
-    r10 = 2.0 * (ex * ey + e0 * ez)
-    r11 = e0 * e0 - ex * ex + ey * ey - ez * ez
-    r12 = 2.0 * (ey * ez - e0 * ex)
-    r20 = 2.0 * (ex * ez - e0 * ey)
-    r21 = 2.0 * (ey * ez + e0 * ex)
-    r22 = e0 * e0 - ex * ex - ey * ey + ez * ez
+    r00, r01, r02, r10, r11, r12, r20, r21, r22 = quaternion_dcm_terms(x[6], x[7], x[8], x[9])
     wn = wind[0] + wind[6]
     we = wind[1] + wind[7]
     wd = wind[2] + wind[8]

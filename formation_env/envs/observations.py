@@ -39,7 +39,7 @@ from ..aircraft.kernels import _air
 from ..aircraft.kernels import pack as _pack_aircraft
 from ..aircraft.state import N_STATES
 from ..atmosphere.wind import WindInput
-from ..frames import dcm_body_to_ned_from_quaternion, euler_from_quaternion
+from ..frames import dcm_body_to_ned_from_quaternion, euler_from_quaternion, quaternion_dcm_terms
 
 __all__ = ["OBS_CLIP", "GROUPS", "observation_size", "group_sizes", "build_observations",
            "build_observations_reference", "to_dict"]
@@ -149,16 +149,7 @@ def _obs_kernel(state, induced, omega, amb, turb, pd, vd, prev, trim_airspeed, a
     for i in range(b):
         for a in range(nv):
             x = state[i, a]
-            e0, ex, ey, ez = x[6], x[7], x[8], x[9]
-            r00 = e0 * e0 + ex * ex - ey * ey - ez * ez
-            r01 = 2.0 * (ex * ey - e0 * ez)
-            r02 = 2.0 * (ex * ez + e0 * ey)
-            r10 = 2.0 * (ex * ey + e0 * ez)
-            r11 = e0 * e0 - ex * ex + ey * ey - ez * ez
-            r12 = 2.0 * (ey * ez - e0 * ex)
-            r20 = 2.0 * (ex * ez - e0 * ey)
-            r21 = 2.0 * (ey * ez + e0 * ex)
-            r22 = e0 * e0 - ex * ex - ey * ey + ez * ez
+            r00, r01, r02, r10, r11, r12, r20, r21, r22 = quaternion_dcm_terms(x[6], x[7], x[8], x[9])
             vel[a, 0] = r00 * x[0] + r01 * x[1] + r02 * x[2]
             vel[a, 1] = r10 * x[0] + r11 * x[1] + r12 * x[2]
             vel[a, 2] = r20 * x[0] + r21 * x[1] + r22 * x[2]
@@ -188,15 +179,7 @@ def _obs_kernel(state, induced, omega, amb, turb, pd, vd, prev, trim_airspeed, a
             o[10], o[11], o[12] = (c * dx + s * dy) / 10.0, (-s * dx + c * dy) / 10.0, dz / 10.0
             dx, dy, dz = vel[a, 0] - vd[i, a, 0], vel[a, 1] - vd[i, a, 1], vel[a, 2] - vd[i, a, 2]
             o[13], o[14], o[15] = (c * dx + s * dy) / 5.0, (-s * dx + c * dy) / 5.0, dz / 5.0
-            r00 = e0 * e0 + ex * ex - ey * ey - ez * ez
-            r01 = 2.0 * (ex * ey - e0 * ez)
-            r02 = 2.0 * (ex * ez + e0 * ey)
-            r10 = 2.0 * (ex * ey + e0 * ez)
-            r11 = e0 * e0 - ex * ex + ey * ey - ez * ez
-            r12 = 2.0 * (ey * ez - e0 * ex)
-            r20 = 2.0 * (ex * ez - e0 * ey)
-            r21 = 2.0 * (ey * ez + e0 * ex)
-            r22 = e0 * e0 - ex * ex - ey * ey + ez * ez
+            r00, r01, r02, r10, r11, r12, r20, r21, r22 = quaternion_dcm_terms(e0, ex, ey, ez)
             w0, w1, w2 = induced[i, a, 0], induced[i, a, 1], induced[i, a, 2]
             o[16] = r00 * w0 + r10 * w1 + r20 * w2  # body = R^T ned
             o[17] = r01 * w0 + r11 * w1 + r21 * w2

@@ -15,6 +15,7 @@ import numba as nb
 import numpy as np
 
 from ..aircraft.kernels import _air, rk4_batch
+from ..frames import quaternion_dcm_terms
 from ..wake.kernels import evaluate_one
 
 _jit = nb.njit(cache=True, error_model="numpy")
@@ -69,15 +70,8 @@ def ell_inputs(state, ambient, wing_origin_b, pos, euler, speed, alpha, beta):
         x = state[a]
         e0, ex, ey, ez = x[6], x[7], x[8], x[9]
         r = np.empty((3, 3))  # body -> NED
-        r[0, 0] = e0 * e0 + ex * ex - ey * ey - ez * ez
-        r[0, 1] = 2.0 * (ex * ey - e0 * ez)
-        r[0, 2] = 2.0 * (ex * ez + e0 * ey)
-        r[1, 0] = 2.0 * (ex * ey + e0 * ez)
-        r[1, 1] = e0 * e0 - ex * ex + ey * ey - ez * ez
-        r[1, 2] = 2.0 * (ey * ez - e0 * ex)
-        r[2, 0] = 2.0 * (ex * ez - e0 * ey)
-        r[2, 1] = 2.0 * (ey * ez + e0 * ex)
-        r[2, 2] = e0 * e0 - ex * ex - ey * ey + ez * ez
+        (r[0, 0], r[0, 1], r[0, 2], r[1, 0], r[1, 1], r[1, 2],
+         r[2, 0], r[2, 1], r[2, 2]) = quaternion_dcm_terms(e0, ex, ey, ez)
         for i in range(3):
             pos[a, i] = x[10 + i] + r[i, 0] * wing_origin_b[0] + r[i, 1] * wing_origin_b[1] + r[i, 2] * wing_origin_b[2]
         vb = np.empty(3)
