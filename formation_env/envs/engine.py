@@ -15,12 +15,14 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
+import numba as nb
 import numpy as np
 
 from ..aircraft import trim
 from ..aircraft.state import N_STATES, POS
 from ..atmosphere.dryden import DrydenConfig, DrydenTurbulence, aircraft_seeds
 from ..atmosphere.wind import WindInput
+from ..frames import quaternion_dcm_terms
 from ..scenarios import Scenario, get_scenario
 from ..sim import FormationSimulator, WakeConfig
 from .config import EnvConfig
@@ -159,10 +161,9 @@ class FormationEpisode:
         return out
 
     def _velocity_ned(self) -> np.ndarray:
-        from ..frames import dcm_body_to_ned_from_quaternion
-
-        r = dcm_body_to_ned_from_quaternion(self.state[..., 6:10])
-        return np.einsum("bvij,bvj->bvi", r, self.state[..., 0:3])
+        out = np.empty(self.state.shape[:2] + (3,))
+        _velocity_ned_kernel(np.ascontiguousarray(self.state), out)
+        return out
 
     def _reference(self, i: int, t: float) -> tuple[np.ndarray, np.ndarray]:
         if not self.config.randomisation.any_manoeuvre:
@@ -322,3 +323,15 @@ def SURFACE_SCALE(limit_rad: float) -> np.ndarray:  # noqa: N802 - a constant th
 RESIDUAL_SCALE = np.array([0.1, 0.1, 0.1, 0.2])  # rad, rad, rad, throttle fraction per unit action
 SETPOINT_POSITION_SCALE_M = 5.0  # m per unit action, slot frame (along, starboard, down)
 SETPOINT_SPEED_SCALE_MPS = 2.0  # m/s per unit action along the demanded track
+
+
+@nb.njit(cache=True, error_model="numpy")
+def _velocity_ned_kernel(state, out):
+    """Ground velocity in NED (B, V, 3) from the body velocities and quaternions."""
+    for b in range(state.shape[0]):
+        for a in range(state.shape[1]):
+            x = state[b, a]
+            r00, r01, r02, r10, r11, r12, r20, r21, r22 = quaternion_dcm_terms(x[6], x[7], x[8], x[9])
+            out[b, a, 0] = r00 * x[0] + r01 * x[1] + r02 * x[2]
+            out[b, a, 1] = r10 * x[0] + r11 * x[1] + r12 * x[2]
+            out[b, a, 2] = r20 * x[0] + r21 * x[1] + r22 * x[2]

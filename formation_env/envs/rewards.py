@@ -41,13 +41,13 @@ def _min_separation(state, out):
 def reward_terms(w: RewardWeights, error, previous_error, action, previous_action, saving, collided, crashed) -> dict:
     """Reward components (B, V) and their sum under ``"total"``. Non-finite inputs count as a crash."""
     with np.errstate(all="ignore"):
-        err = np.nan_to_num(error, nan=1e6, posinf=1e6)
-        prev = np.nan_to_num(previous_error, nan=1e6, posinf=1e6)
+        err = np.where(np.isfinite(error), error, 1e6)  # a diverged UAV counts as far from its slot
+        prev = np.where(np.isfinite(previous_error), previous_error, 1e6)
         terms = {
             "slot": -w.slot * np.minimum(err / w.slot_scale_m, 5.0),
             "effort": -w.effort * np.sum(action * action, axis=-1) / 4.0,
             "rate": -w.rate * np.sum((action - previous_action) ** 2, axis=-1) / 4.0,
-            "benefit": w.benefit * np.nan_to_num(saving),
+            "benefit": w.benefit * np.where(np.isfinite(saving), saving, 0.0),
             "progress": w.progress * np.clip((prev - err) / w.slot_scale_m, -1.0, 1.0),
             "collision": -w.collision * collided.astype(float),
             "crash": -w.crash * crashed.astype(float),
