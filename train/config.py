@@ -14,6 +14,8 @@ used for scenarios without their own), in the style of the RL Baselines3 Zoo::
       eval_freq: 50000              # evaluate every this many env steps (0: never)
       eval_episodes: 8              # held-out validation episodes per evaluation
       checkpoint_freq: 100000       # checkpoint every this many env steps (0: never)
+      reward_scale: 0.05            # rewards seen by the learner are multiplied by this (the curves
+                                    # and evaluations report the unscaled env reward)
 
 A ``--config FILE`` is the same format (a section keyed by the scenario, or a flat section) and is
 merged over the defaults key by key (``env_kwargs``, ``policy_kwargs`` and their sub-dicts merged
@@ -40,7 +42,7 @@ VALIDATION_SEED_BASE = 10_000_000_000  # the eval callback's (model selection) e
 TEST_SEED_BASE = 20_000_000_000        # `formation-env evaluate`'s default episodes
 
 _TRAIN_KEYS = {"n_timesteps", "n_formations", "policy", "policy_kwargs", "env_kwargs", "eval_freq",
-               "eval_episodes", "checkpoint_freq", "torch_threads"}
+               "eval_episodes", "checkpoint_freq", "torch_threads", "reward_scale"}
 _ALGO_KEYS = {
     "ppo": {"learning_rate", "n_steps", "batch_size", "n_epochs", "gamma", "gae_lambda", "clip_range",
             "clip_range_vf", "normalize_advantage", "ent_coef", "vf_coef", "max_grad_norm", "use_sde",
@@ -121,6 +123,7 @@ class TrainConfig:
     eval_episodes: int = 8
     checkpoint_freq: int = 100_000
     torch_threads: int = 1
+    reward_scale: float = 1.0
 
     def __post_init__(self) -> None:
         from formation_env.scenarios import scenario_names
@@ -151,6 +154,9 @@ class TrainConfig:
                 raise ValueError(f"{name} must be >= 0 (0: off), got {getattr(self, name)}")
         if self.eval_episodes < 1:
             raise ValueError(f"eval_episodes must be >= 1, got {self.eval_episodes}")
+        if isinstance(self.reward_scale, bool) or not isinstance(self.reward_scale, (int, float)) \
+                or not math.isfinite(self.reward_scale) or self.reward_scale <= 0:
+            raise ValueError(f"reward_scale must be a finite number > 0, got {self.reward_scale!r}")
         if self.torch_threads < 1:
             raise ValueError(f"torch_threads must be >= 1, got {self.torch_threads}")
         bad = sorted(set(self.algo_kwargs) - _ALGO_KEYS[self.algo])

@@ -136,9 +136,25 @@ def build_model(cfg: TrainConfig, env):
 
 
 def make_train_env(cfg: TrainConfig, seed: int):
+    from stable_baselines3.common.vec_env import VecEnvWrapper
+
     from formation_env.envs import FormationVecEnv
 
-    return FormationVecEnv(cfg.n_formations, make_env_config(cfg), seed=seed)
+    env = FormationVecEnv(cfg.n_formations, make_env_config(cfg), seed=seed)
+    if cfg.reward_scale == 1.0:
+        return env
+
+    class ScaleReward(VecEnvWrapper):
+        """Multiplies the learner's rewards by ``reward_scale`` (infos['episode'] stays unscaled)."""
+
+        def reset(self):
+            return self.venv.reset()
+
+        def step_wait(self):
+            obs, rew, done, infos = self.venv.step_wait()
+            return obs, rew * cfg.reward_scale, done, infos
+
+    return ScaleReward(env)
 
 
 def _meta(cfg: TrainConfig, steps: int, extra: dict | None = None) -> dict:

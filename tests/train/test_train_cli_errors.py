@@ -49,6 +49,8 @@ def test_train_api_errors(tmp_path):
     with pytest.raises(ValueError, match="Randomisation"):
         train(scenario="formation_keeping", algo="ppo", steps=10, out_dir=tmp_path / "c",
               overrides={"env_kwargs": {"randomisation": {"turbulence_sigma_mps": -1}}})
+    with pytest.raises(ValueError, match="reward_scale must be"):
+        train(scenario="formation_keeping", algo="ppo", steps=10, out_dir=tmp_path / "e", overrides={"reward_scale": 0})
     with pytest.raises(ValueError, match="does not exist"):
         train(scenario="formation_keeping", algo="ppo", steps=10, config_file=tmp_path / "nope.yml", out_dir=tmp_path / "d")
 

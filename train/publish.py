@@ -1,0 +1,104 @@
+"""Copy a run's best model into ``train/policies/`` with its metadata and learning curve.
+
+    python -m train.publish RUN_DIR NAME [--eval RESULTS_JSON] [--wall-s S] [--stopped-at STEPS]
+
+Writes ``NAME.zip`` (the SB3 model), ``NAME.json`` (env/action mode, exact command, seed, steps, wall
+time, validation and test numbers) and ``NAME_curve.csv`` (every training episode's return) and
+``NAME_evaluations.json`` (validation at every evaluation). Never overwrites.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import shutil
+from pathlib import Path
+
+import yaml
+
+from formation_env.io import atomic_write, atomic_write_json
+
+POLICIES = Path(__file__).resolve().parent / "policies"
+
+
+def publish(run_dir: str | Path, name: str, *, eval_json: str | Path | None = None, wall_s: float | None = None,
+            stopped_at: int | None = None, note: str | None = None) -> Path:
+    run = Path(run_dir)
+    cfg = yaml.safe_load((run / "config.yaml").read_text())
+    best = json.loads((run / "best_model.json").read_text())
+    c = cfg["config"]
+    meta = {
+        "env": {k: best[k] for k in ("algo", "scenario", "action_mode", "control_hz")},
+        "command": cfg.get("command"),
+        "seed": c["seed"],
+        "num_timesteps": best["num_timesteps"],
+        "run_steps": stopped_at,
+        "wall_s": wall_s,
+        "config": c,
+        "validation": best["validation"],
+        "note": note,
+    }
+    if eval_json is not None:
+        rep = json.loads(Path(eval_json).read_text())
+        meta["evaluation"] = {"seeds": rep["seeds"], "turbulence_sigma_mps": rep["turbulence_sigma_mps"], "wake": rep["wake"],
+                              "summaries": {n: r["summary"] for n, r in rep["policies"].items()}}
+    else:
+        meta["evaluation"] = None
+    atomic_write(POLICIES / f"{name}.zip", lambda p: shutil.copyfile(run / "best_model.zip", p))
+    atomic_write_json(POLICIES / f"{name}.json", meta)
+    atomic_write(POLICIES / f"{name}_curve.csv", lambda p: shutil.copyfile(run / "curve.csv", p))
+    atomic_write(POLICIES / f"{name}_evaluations.json", lambda p: shutil.copyfile(run / "evaluations.json", p))
+    return POLICIES / f"{name}.zip"
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser()
+    ap.add_argument("run_dir")
+    ap.add_argument("name")
+    ap.add_argument("--eval", default=None)
+    ap.add_argument("--wall-s", type=float, default=None)
+    ap.add_argument("--stopped-at", type=int, default=None)
+    ap.add_argument("--note", default=None)
+    a = ap.parse_args()
+    print(publish(a.run_dir, a.name, eval_json=a.eval, wall_s=a.wall_s, stopped_at=a.stopped_at, note=a.note))
+
+
+if __name__ == "__main__":
+    main()
+
+
+def plot_curves(names: list[str], out: str | Path, *, pid_validation: dict | None = None, bin_steps: int = 20_000) -> Path:
+    """Learning curves of committed policies: training-episode return (binned mean) and validation
+    RMS slot error against steps (``pid_validation``: {scenario: the PID's RMS on the validation seeds})."""
+    import csv
+
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    import numpy as np
+
+    fig, (a1, a2) = plt.subplots(1, 2, figsize=(11, 4))
+    for i, name in enumerate(names):
+        with (POLICIES / f"{name}_curve.csv").open() as fh:
+            rows = np.array([[float(x) for x in r] for r in list(csv.reader(fh))[1:]])
+        bins = (rows[:, 0] // bin_steps).astype(int)
+        xs = [(b + 0.5) * bin_steps for b in np.unique(bins)]
+        ys = [rows[bins == b, 1].mean() for b in np.unique(bins)]
+        a1.plot(xs, ys, color=f"C{i}", label=name)
+        ev = json.loads((POLICIES / f"{name}_evaluations.json").read_text())
+        a2.plot([e["num_timesteps"] for e in ev], [e["rms_slot_error_m"] for e in ev], "o-", color=f"C{i}", label=name)
+        scen = json.loads((POLICIES / f"{name}.json").read_text())["env"]["scenario"]
+        if pid_validation and scen in pid_validation:
+            a2.axhline(pid_validation[scen], color=f"C{i}", ls="--", label=f"PID ({scen})")
+    a1.set_xlabel("environment steps")
+    a1.set_ylabel(f"training episode return (mean per {bin_steps // 1000}k steps)")
+    a2.set_xlabel("environment steps")
+    a2.set_ylabel("validation RMS slot error (m), 8 held-out episodes")
+    for a in (a1, a2):
+        a.grid(True, alpha=0.3)
+        a.legend(fontsize=8)
+    fig.tight_layout()
+    path = atomic_write(out, lambda p: fig.savefig(p, dpi=100, format="png"))
+    plt.close(fig)
+    return path
