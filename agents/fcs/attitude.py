@@ -9,8 +9,6 @@ aileron, which rolls right on AeroSim).
 
 from __future__ import annotations
 
-import numpy as np
-
 from .common import pi_integrator_rate, saturate
 from .gains import AttitudeGains
 

@@ -12,8 +12,6 @@
 
 from __future__ import annotations
 
-import numpy as np
-
 from .common import pi_integrator_rate, saturate, wrap_angle
 from .gains import AutopilotGains
 

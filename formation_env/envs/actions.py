@@ -10,11 +10,11 @@ setpoints      offsets of the PID trajectory tracker's demands: position demand 
                starboard of and below the demanded track; speed demand + 2 m/s * a3 along the track.
 =============  ==============================================================================================
 
-The scales live in :mod:`formation_env.envs.engine` (``SURFACE_SCALE``, ``RESIDUAL_SCALE``,
+The scales live in :mod:`formation_env.envs.engine` (``surface_scale``, ``RESIDUAL_SCALE``,
 ``SETPOINT_POSITION_SCALE_M``, ``SETPOINT_SPEED_SCALE_MPS``).
 """
 
 from .config import ACTION_MODES
-from .engine import RESIDUAL_SCALE, SETPOINT_POSITION_SCALE_M, SETPOINT_SPEED_SCALE_MPS, SURFACE_SCALE
+from .engine import RESIDUAL_SCALE, SETPOINT_POSITION_SCALE_M, SETPOINT_SPEED_SCALE_MPS, surface_scale
 
-__all__ = ["ACTION_MODES", "RESIDUAL_SCALE", "SETPOINT_POSITION_SCALE_M", "SETPOINT_SPEED_SCALE_MPS", "SURFACE_SCALE"]
+__all__ = ["ACTION_MODES", "RESIDUAL_SCALE", "SETPOINT_POSITION_SCALE_M", "SETPOINT_SPEED_SCALE_MPS", "surface_scale"]

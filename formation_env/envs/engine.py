@@ -297,7 +297,7 @@ class FormationEpisode:
         out = cmd.copy()
         if target.mode == "surfaces":
             # a = 0 is the trim command; +-1 spans the surface limit (and half the throttle range) about it
-            mapped = np.clip(self.trim.controls[0, :4] + a * SURFACE_SCALE(self.surface_limit_rad), lo, hi)
+            mapped = np.clip(self.trim.controls[0, :4] + a * surface_scale(self.surface_limit_rad), lo, hi)
             out[:, m] = mapped[:, m]
         else:  # residual: added to the PID command
             out[:, m] = np.clip(cmd[:, m] + a[:, m] * RESIDUAL_SCALE, lo, hi)
@@ -316,7 +316,9 @@ class FormationEpisode:
 
 
 # Action scaling (documented in formation_env.envs.actions)
-def SURFACE_SCALE(limit_rad: float) -> np.ndarray:  # noqa: N802 - a constant that depends on the FCS limit
+def surface_scale(limit_rad: float) -> np.ndarray:
+    """Surfaces-mode scale per unit action: the FCS surface limit (rad) for the three surfaces,
+    0.5 for the throttle."""
     return np.array([limit_rad, limit_rad, limit_rad, 0.5])
 
 

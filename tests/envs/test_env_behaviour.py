@@ -141,3 +141,23 @@ def test_compiled_observations_equal_the_numpy_definition():
         args = (e.state, e.induced, e.omega, e.ambient_wind(), e.turbulence_body(), e.position_demand_now(),
                 e.velocity_demand, c.previous_action, e.scenario.airspeed_mps, e.scenario.altitude_m)
         np.testing.assert_allclose(build_observations(*args), build_observations_reference(*args), rtol=0, atol=1e-12)
+
+
+def test_leader_manoeuvre_turns_climbs_and_changes_speed_as_drawn():
+    """The randomised reference path: after the manoeuvre the demanded velocity has the drawn
+    heading change, zero climb rate and the drawn speed change; the path is its integral."""
+    env = formation_env.parallel_env("formation_keeping", action_mode="residual", duration_s=40.0,
+                                     randomisation=Randomisation(leader_turn_deg=30.0, leader_climb_m=10.0,
+                                                                 leader_speed_mps=2.0))
+    env.reset(seed=7)
+    eng = env.engine
+    t0, dpsi, dh, dv = eng.manoeuvre[0]
+    assert 0.0 <= t0 <= 20.0 and abs(dpsi) > 0 and abs(dh) > 0 and abs(dv) > 0
+    while env.agents:
+        env.step({a: np.zeros(4, np.float32) for a in env.agents})
+    vd = eng.velocity_demand[0, 0]
+    assert np.arctan2(vd[1], vd[0]) == pytest.approx(dpsi, abs=1e-12)
+    assert np.hypot(vd[0], vd[1]) == pytest.approx(25.0 + dv, abs=1e-12)
+    assert vd[2] == 0.0
+    # Altitude of the reference changed by the drawn amount (within one physics step of climb).
+    assert -eng.ref_pos[0, 2] - 1000.0 == pytest.approx(dh, abs=1.5 * eng.dt + 1e-9)
