@@ -1,4 +1,4 @@
-"""Evaluation of policies (SB3 zips or the thesis PID) on held-out seeds, wake and Dryden turbulence on.
+"""Evaluation of policies (SB3 zips, RLlib checkpoints or the thesis PID) on held-out seeds, wake and Dryden turbulence on.
 
 Every policy flies the same episodes: formation ``f`` of the batch is the episode with seed
 ``seeds[f]`` (exactly what a single env reset with that seed gives), the followers are the agents,
@@ -80,13 +80,22 @@ def _policy_metadata(path: Path) -> dict:
 
 
 def load_policy(spec: str, *, action_mode: str | None = None, name: str | None = None, device: str = "cpu") -> EvalPolicy:
-    """``"pid"`` or the path of an SB3 zip (its algo and action mode come from the sidecar JSON or the
-    run's config.yaml; ``action_mode`` overrides)."""
+    """``"pid"``, the path of an SB3 zip (its algo and action mode come from the sidecar JSON or the
+    run's config.yaml; ``action_mode`` overrides), or an RLlib checkpoint / run directory of
+    ``formation-env train --backend rllib`` (its metadata fixes the action mode)."""
     if spec == "pid":
         return _pid_policy()
     path = Path(spec)
+    if path.is_dir():
+        # An RLlib checkpoint (or run directory); ray is imported only here, and only then.
+        from .rllib_backend import is_rllib_checkpoint, load_rllib_policy
+
+        if not is_rllib_checkpoint(path):
+            raise ValueError(f"policy directory {spec!r} is not an RLlib checkpoint or run directory of this project")
+        return load_rllib_policy(path, name=name)  # its own metadata fixes the action mode
     if not path.is_file():
-        raise ValueError(f"policy file {spec!r} does not exist (give an SB3 .zip or 'pid')")
+        raise ValueError(f"policy file {spec!r} does not exist (give an SB3 .zip, an RLlib checkpoint directory "
+                         "or 'pid')")
     meta = _policy_metadata(path)
     mode = action_mode or meta.get("action_mode")
     if mode is None:

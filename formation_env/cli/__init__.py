@@ -12,6 +12,8 @@ import argparse
 import importlib
 import sys
 
+from ..errors import MissingDependencyError
+
 COMMANDS = ("verify", "bench", "demo", "trim", "modes", "run", "report", "replay", "train", "evaluate")
 
 
@@ -37,7 +39,7 @@ def main(argv: list[str] | None = None) -> int:
     args = parser.parse_args(argv)
     try:
         return int(args.func(args) or 0)
-    except (ValueError, FileExistsError) as exc:
+    except (ValueError, FileExistsError, MissingDependencyError, ConnectionError) as exc:
         print(f"formation-env {args.command}: error: {exc}", file=sys.stderr)
         return 2
 

@@ -91,8 +91,12 @@ class FormationParallelEnv(ParallelEnv):
             raise ValueError(f"options must be a dict or None, got {type(options).__name__}")
         if seed is None:
             seed = int(self._entropy.spawn(1)[0].generate_state(1)[0])
-        elif isinstance(seed, bool) or not isinstance(seed, (int, np.integer)):
-            raise ValueError(f"seed must be an int or None, got {seed!r}")
+        elif isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
+            raise ValueError(f"seed must be an int >= 0 or None, got {seed!r}")
+        else:
+            # Gymnasium's convention: a seed also seeds the stream later unseeded resets draw from, so a
+            # trainer that seeds only the first reset (RLlib's env runners do) replays exactly.
+            self._entropy = np.random.SeedSequence(int(seed))
         self.core.reset(seeds=[int(seed)])
         self.agents = list(self.possible_agents)
         return self._observations(), self._infos()

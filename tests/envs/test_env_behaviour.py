@@ -41,6 +41,22 @@ def test_seeded_1000_step_replay_is_bit_exact(scenario):
     assert not all(np.array_equal(x[2], y[2]) for x, y in zip(a[:50], c))  # another seed differs
 
 
+def test_a_seeded_reset_also_seeds_the_later_unseeded_resets():
+    # RLlib's env runners seed only the first reset; the episodes after it must still replay.
+    def episode_starts(seed):
+        env = formation_env.parallel_env("formation_keeping", randomisation=Randomisation(initial_offset_m=2.0))
+        starts = [env.reset(seed=seed)[0]["uav_1"]]
+        starts += [env.reset()[0]["uav_1"] for _ in range(2)]
+        return starts
+
+    a, b, c = episode_starts(5), episode_starts(5), episode_starts(6)
+    assert all(np.array_equal(x, y) for x, y in zip(a, b))
+    assert not np.array_equal(a[1], a[2])          # later episodes differ from each other
+    assert not np.array_equal(a[1], c[1])          # and from another seed's
+    with pytest.raises(ValueError, match="seed"):
+        formation_env.parallel_env("formation_keeping").reset(seed=-1)
+
+
 @pytest.mark.parametrize("scenario", ["formation_keeping", "reconfiguration"])
 def test_pid_through_the_env_reproduces_the_runner(scenario):
     """Zero residual = the PID baseline: the env's trajectory equals the scenario runner's exactly."""

@@ -1,0 +1,267 @@
+"""The Ray RLlib backend: a loopback-only Ray with 2 CPUs trains with 2 env runners, checkpoints,
+restores and evaluates, and leaves no Ray process behind; clear errors for a missing extra and an
+unreachable cluster; nothing outside the backend imports ray."""
+
+from __future__ import annotations
+
+import json
+import os
+import shutil
+import socket
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+import yaml
+
+from formation_env.cli import main
+from formation_env.errors import MissingDependencyError
+
+pytest.importorskip("ray.rllib", reason="the 'distributed' extra (ray[rllib]) is part of the test install")
+
+REPO = Path(__file__).resolve().parents[2]
+CLI = [sys.executable, "-m", "formation_env.cli"]
+TINY = {"training": {"train_batch_size_per_learner": 200, "minibatch_size": 100, "num_epochs": 1},
+        "model": {"fcnet_hiddens": [16]}, "env_kwargs": {"duration_s": 3.0}, "checkpoint_every": 1}
+
+
+@pytest.fixture
+def ray_tmpdir():
+    """A private, short Ray temp dir (Unix socket paths must stay under ~100 characters); every Ray
+    process started with it carries its path, which is how the tests find leftovers."""
+    path = tempfile.mkdtemp(prefix="fe-ray-", dir="/tmp")
+    yield path
+    shutil.rmtree(path, ignore_errors=True)
+
+
+def _processes_mentioning(text: str) -> list[str]:
+    found = []
+    for pid in os.listdir("/proc"):
+        if not pid.isdigit() or int(pid) == os.getpid():
+            continue
+        try:
+            cmd = Path(f"/proc/{pid}/cmdline").read_bytes().replace(b"\0", b" ").decode(errors="replace")
+        except OSError:
+            continue
+        if text in cmd:
+            found.append(f"{pid}: {cmd[:160]}")
+    return found
+
+
+def _assert_no_ray_left(tmpdir: str) -> None:
+    deadline = time.time() + 20.0  # raylet/GCS exit asynchronously after ray.shutdown()
+    while (left := _processes_mentioning(tmpdir)) and time.time() < deadline:
+        time.sleep(0.5)
+    assert not left, f"Ray processes left running: {left}"
+
+
+def _loopback_only_prefix() -> list[str]:
+    """Run in a fresh network namespace whose only interface is loopback, where possible (root, or
+    unprivileged user namespaces): Ray's servers listen on every interface, and there the only one is
+    127.0.0.1, so nothing of the test's Ray is reachable from outside this machine, nor can it reach out."""
+    if not (shutil.which("unshare") and shutil.which("ip")):
+        return []
+    for flags in (["-n"], ["-r", "-n"]):
+        try:
+            ok = subprocess.run(["unshare", *flags, "ip", "link", "set", "lo", "up"], capture_output=True,
+                                timeout=20).returncode == 0
+        except (OSError, subprocess.SubprocessError):
+            ok = False
+        if ok:
+            return ["unshare", *flags, "sh", "-c", 'ip link set lo up && exec "$@"', "sh"]
+    return []
+
+
+def _cli(args, tmpdir, cwd):
+    env = dict(os.environ, RAY_TMPDIR=tmpdir, PYTHONPATH=str(REPO))
+    env.pop("RAY_ADDRESS", None)
+    return subprocess.run(_loopback_only_prefix() + CLI + args, cwd=cwd, env=env, capture_output=True, text=True,
+                          timeout=480)
+
+
+def test_rllib_trains_checkpoints_restores_and_evaluates_on_loopback_ray(tmp_path, ray_tmpdir):
+    cfg = tmp_path / "tiny.yml"
+    cfg.write_text(yaml.safe_dump(TINY))
+    run = tmp_path / "run"
+    base = ["train", "--backend", "rllib", "--scenario", "formation_keeping", "--num-cpus", "2", "--out", str(run)]
+
+    r = _cli(base + ["--num-env-runners", "2", "--iterations", "2", "--seed", "3", "--config", str(cfg)],
+             ray_tmpdir, tmp_path)
+    assert r.returncode == 0, r.stdout[-3000:] + r.stderr[-3000:]
+    assert "127.0.0.1" in r.stdout  # the local instance is bound to loopback
+    _assert_no_ray_left(ray_tmpdir)
+    ck2 = run / "checkpoints" / "iter_000002"
+    meta = json.loads((ck2 / "formation_env.json").read_text())
+    assert meta["modules"] == ["shared"] and meta["iteration"] == 2 and meta["env_steps"] == 400
+    assert (ck2 / "learner_group" / "learner" / "rl_module" / "shared").is_dir()
+    assert not [p for p in (run / "checkpoints").iterdir() if p.name.startswith(".")]  # no temporaries left
+    rows = (run / "progress.csv").read_text().splitlines()
+    assert len(rows) == 3 and rows[0].startswith("iteration,env_steps_lifetime")
+    assert all(float(r.split(",")[-1]) > 0 for r in rows[1:])  # sampled env steps/s recorded
+    summary = json.loads((run / "summary.json").read_text())
+    assert summary["num_env_runners"] == 2 and summary["iterations"] == 2
+
+    # The same directory is never silently reused.
+    r = _cli(base + ["--iterations", "1"], ray_tmpdir, tmp_path)
+    assert r.returncode == 2 and "not empty" in r.stderr
+
+    # Resume: restores iteration 2 (weights, optimiser, counters) and goes on to 3.
+    r = _cli(base + ["--resume", "--iterations", "3", "--num-env-runners", "1"], ray_tmpdir, tmp_path)
+    assert r.returncode == 0, r.stdout[-3000:] + r.stderr[-3000:]
+    assert "resuming" in r.stdout and "iter_000002" in r.stdout
+    _assert_no_ray_left(ray_tmpdir)
+    meta3 = json.loads((run / "checkpoints" / "iter_000003" / "formation_env.json").read_text())
+    assert meta3["iteration"] == 3 and meta3["env_steps"] == 600
+    assert len((run / "progress.csv").read_text().splitlines()) == 4
+
+    # The restored weights are the saved ones, and training moved them on.
+    from train.rllib_backend import load_rllib_policy
+
+    obs = np.random.default_rng(0).normal(size=(8, _obs_size(2))).astype(np.float32)
+    a2 = load_rllib_policy(ck2).act(obs)
+    a3 = load_rllib_policy(run).act(obs)  # a run directory means its latest checkpoint
+    assert a2.shape == (8, 4) and np.all(np.abs(a2) <= 1.0)
+    assert np.array_equal(a2, load_rllib_policy(ck2).act(obs))
+    assert not np.array_equal(a2, a3)
+
+    # RLlib-, SB3- and PID-flown episodes in one table.
+    sb3 = REPO / "train" / "policies" / "formation_keeping_ppo_residual.zip"
+    out = tmp_path / "eval"
+    r = _cli(["evaluate", "--scenario", "formation_keeping", "--policy", str(run), "--policy", str(sb3),
+              "--policy", "pid", "--episodes", "2", "--duration", "3", "--no-plots", "--out", str(out)],
+             ray_tmpdir, tmp_path)
+    assert r.returncode == 0, r.stdout[-3000:] + r.stderr[-3000:]
+    res = json.loads((out / "results.json").read_text())
+    names = list(res["policies"])
+    assert len(names) == 3 and names[0].startswith("rllib-") and names[2] == "pid"
+    for p in res["policies"].values():
+        assert p["summary"]["episodes"] == 2 and np.isfinite(p["summary"]["rms_slot_error_m"])
+    header = (out / "results.md").read_text()
+    assert all(n in header for n in names)
+    _assert_no_ray_left(ray_tmpdir)
+
+
+def test_rllib_per_role_policies_train_leader_and_follower(tmp_path, ray_tmpdir, monkeypatch):
+    import ray
+
+    from train.rllib_backend import load_rllib_policy, train_rllib
+
+    monkeypatch.setenv("RAY_TMPDIR", ray_tmpdir)
+    monkeypatch.delenv("RAY_ADDRESS", raising=False)
+    s = train_rllib(scenario="echelon", action_mode="surfaces", learning="all", policies="per-role", iterations=1,
+                    num_env_runners=0, num_cpus=1, out_dir=tmp_path / "run", overrides=TINY, log=lambda m: None)
+    assert not ray.is_initialized()
+    _assert_no_ray_left(ray_tmpdir)
+    assert s["modules"] == ["leader", "follower"]
+    ck = Path(s["checkpoint"])
+    for m in ("leader", "follower"):
+        assert (ck / "learner_group" / "learner" / "rl_module" / m).is_dir()
+    row = (tmp_path / "run" / "progress.csv").read_text().splitlines()[1].split(",")
+    assert int(row[3]) == 3 * int(row[2])  # agent steps: all three UAVs acted at every env step
+    leader = load_rllib_policy(ck, module_id="leader").act(np.zeros((2, _obs_size(3)), np.float32))
+    assert leader.shape == (2, 4)
+    with pytest.raises(ValueError, match="no module 'shared'"):
+        load_rllib_policy(ck, module_id="shared")
+
+
+def _obs_size(n_vehicles: int) -> int:
+    from formation_env.envs.observations import observation_size
+
+    return observation_size(n_vehicles)
+
+
+def test_rllib_env_wrapper_keeps_agent_order_and_scales_rewards():
+    import formation_env
+    from train.rllib_env import FormationMultiAgentEnv, role_policy, shared_policy
+
+    cfg = {"scenario": "echelon", "action_mode": "surfaces", "learning": "all", "env_kwargs": {}, "reward_scale": 0.5}
+    env = FormationMultiAgentEnv(cfg)
+    assert env.possible_agents == ["uav_0", "uav_1", "uav_2"]
+    ref = formation_env.parallel_env("echelon", learning="all", action_mode="surfaces", obs_mode="flat")
+    obs, _ = env.reset(seed=4)
+    obs_ref, _ = ref.reset(seed=4)
+    assert all(np.array_equal(obs[a], obs_ref[a]) for a in ref.possible_agents)
+    act = {a: np.full(4, 0.1, np.float32) for a in env.agents}
+    _, rew, term, trunc, _ = env.step(act)
+    _, rew_ref, _, _, _ = ref.step(act)
+    assert all(rew[a] == pytest.approx(0.5 * rew_ref[a], rel=1e-12) for a in rew_ref)
+    assert term["__all__"] is False and trunc["__all__"] is False
+    assert [role_policy(a) for a in env.possible_agents] == ["leader", "follower", "follower"]
+    assert {shared_policy(a) for a in env.possible_agents} == {"shared"}
+
+
+def test_address_parsing_and_unreachable_cluster_errors(capsys, tmp_path, monkeypatch):
+    from train.rllib_backend import ClusterUnreachableError, check_reachable, connect, parse_address
+
+    assert parse_address(None) is None and parse_address("local") is None and parse_address("auto") == "auto"
+    assert parse_address("10.0.0.5:6379") == ("10.0.0.5", 6379)
+    assert parse_address("[::1]:6379") == ("::1", 6379)
+    for bad in ("10.0.0.5", "host:", ":6379", "host:70000", "host:port"):
+        with pytest.raises(ValueError, match="HOST:PORT"):
+            parse_address(bad)
+    with socket.socket() as s:  # a port nobody listens on
+        s.bind(("127.0.0.1", 0))
+        port = s.getsockname()[1]
+    t0 = time.perf_counter()
+    with pytest.raises(ClusterUnreachableError, match=f"127.0.0.1:{port}.*ray start --head"):
+        check_reachable("127.0.0.1", port)
+    assert time.perf_counter() - t0 < 30  # refused at once, not after Ray's minute of retries
+    monkeypatch.delenv("RAY_ADDRESS", raising=False)
+    monkeypatch.setenv("RAY_TMPDIR", tempfile.mkdtemp(prefix="fe-ray-", dir="/tmp"))
+    with pytest.raises(ClusterUnreachableError, match="no running Ray cluster"):
+        connect("auto", log=lambda m: None)
+    out = tmp_path / "run"
+    code = main(["train", "--backend", "rllib", "--scenario", "formation_keeping", "--address", f"127.0.0.1:{port}",
+                 "--out", str(out)])
+    err = capsys.readouterr().err
+    assert code == 2 and f"cannot reach a Ray cluster at 127.0.0.1:{port}" in err
+    assert not out.exists()  # nothing written for a run that never started
+    code = main(["train", "--backend", "rllib", "--scenario", "formation_keeping", "--address", "nowhere"])
+    assert code == 2 and "HOST:PORT" in capsys.readouterr().err
+
+
+def test_missing_ray_gives_the_install_command(capsys, monkeypatch, tmp_path):
+    from train.rllib_backend import require_rllib
+
+    monkeypatch.setitem(sys.modules, "ray", None)  # import ray -> ImportError, as when it is not installed
+    with pytest.raises(MissingDependencyError, match=r'pip install -e "\.\[distributed\]"'):
+        require_rllib()
+    code = main(["train", "--backend", "rllib", "--scenario", "formation_keeping", "--out", str(tmp_path / "r")])
+    assert code == 2 and "[distributed]" in capsys.readouterr().err
+    (tmp_path / "ck").mkdir()
+    (tmp_path / "ck" / "formation_env.json").write_text("{}")
+    code = main(["evaluate", "--scenario", "formation_keeping", "--policy", str(tmp_path / "ck"), "--no-plots",
+                 "--out", str(tmp_path / "e")])
+    assert code == 2 and "[distributed]" in capsys.readouterr().err
+
+
+def test_nothing_outside_the_backend_imports_ray():
+    code = ("import sys, formation_env, formation_env.envs, formation_env.cli, agents.run, train.train, "
+            "train.evaluate, train.rllib_backend\n"
+            "formation_env.cli.build_parser()\n"
+            "env = formation_env.parallel_env('formation_keeping'); env.reset(seed=0)\n"
+            "print('ray' in sys.modules)")
+    r = subprocess.run([sys.executable, "-c", code], cwd=REPO, capture_output=True, text=True, timeout=300)
+    assert r.returncode == 0, r.stderr[-2000:]
+    assert r.stdout.strip() == "False"
+
+
+def test_rllib_config_rejects_bad_values():
+    from train.rllib_backend import RLlibTrainConfig
+
+    with pytest.raises(ValueError, match="policies must be one of"):
+        RLlibTrainConfig(scenario="formation_keeping", policies="each")
+    with pytest.raises(ValueError, match="unknown training key"):
+        RLlibTrainConfig(scenario="formation_keeping", training={"learning_rate": 1e-3})
+    with pytest.raises(ValueError, match="num_env_runners must be an integer >= 0"):
+        RLlibTrainConfig(scenario="formation_keeping", num_env_runners=-1)
+    with pytest.raises(ValueError, match="no followers"):
+        RLlibTrainConfig(scenario="tracking")
+    with pytest.raises(ValueError, match="unknown scenario"):
+        RLlibTrainConfig(scenario="airshow")
+    assert RLlibTrainConfig(scenario="echelon", learning="all", policies="per-role").modules == ["leader", "follower"]
+    assert RLlibTrainConfig(scenario="echelon", policies="per-role").modules == ["follower"]

@@ -1,0 +1,623 @@
+"""Multi-agent PPO on Ray RLlib, on this machine or on an existing Ray cluster.
+
+``formation-env train --backend rllib`` trains the PettingZoo ParallelEnv through RLlib's PettingZoo
+support (``train/rllib_env.py``): one policy shared by every learning UAV by default, or one policy
+per role (``leader`` = vehicle 0, which flies the scenario's path; ``follower`` = the others) with
+``policies="per-role"``. Sampling runs on ``num_env_runners`` Ray actors; the PPO update runs in the
+driver.
+
+Ray is an optional dependency (``pip install -e ".[distributed]"``). This module imports it only
+inside functions, so importing the module (``formation-env evaluate`` does, to recognise RLlib
+checkpoints) costs nothing; nothing else in the project imports ray.
+
+Where Ray runs (``address``):
+
+* ``None`` / ``"local"``: a private Ray instance on this machine, bound to 127.0.0.1, stopped at the end;
+* ``"auto"``: the Ray cluster this machine belongs to (``ray start`` was run here, or RAY_ADDRESS);
+* ``"HOST:PORT"``: the head node of an existing cluster (its GCS port, 6379 by default).
+
+Run directory (a new directory; ``resume`` continues one)::
+
+    config.yaml                         the RLlibTrainConfig and the command
+    checkpoints/iter_000010/            RLlib checkpoints (Algorithm.save_to_path), each written to a
+                                        temporary directory and renamed into place, with
+                                        formation_env.json (what `formation-env evaluate` needs)
+    progress.csv                        one row per iteration (steps, return, sampling throughput)
+    summary.json                        wall time, steps, throughput, last checkpoint
+
+Steps are RLlib env steps: one decision of the whole formation (0.1 s). With the default
+``learning="followers"`` in a two-UAV scenario that is one follower decision, the unit of SB3's steps.
+
+Reproducibility: the seed fixes the policy initialisation and every env runner's episode stream
+(runner ``i`` starts from seed ``seed + i``); RLlib samples on several actors concurrently, so a rerun
+with the same seed is close but not guaranteed bit-identical (the SB3 backend is).
+"""
+
+from __future__ import annotations
+
+import copy
+import csv
+import io
+import json
+import math
+import os
+import re
+import socket
+import tempfile
+import time
+from collections.abc import Callable
+from dataclasses import asdict, dataclass, field
+from pathlib import Path
+from types import SimpleNamespace
+
+import numpy as np
+
+from formation_env.errors import MissingDependencyError
+
+from .config import _ENV_KEYS, HYPERPARAMS_DIR, _merge, _section, load_yaml, make_env_config
+
+__all__ = ["RLlibTrainConfig", "train_rllib", "load_rllib_policy", "is_rllib_checkpoint", "require_rllib",
+           "connect", "parse_address", "ClusterUnreachableError", "latest_rllib_checkpoint", "benchmark_sampling",
+           "POLICY_MODES", "LEARNING_MODES", "DISTRIBUTED_INSTALL"]
+
+DISTRIBUTED_INSTALL = 'pip install -e ".[distributed]"'
+POLICY_MODES = ("shared", "per-role")
+LEARNING_MODES = ("followers", "all")
+CHECKPOINT_META = "formation_env.json"
+_CKPT = re.compile(r"^iter_(\d+)$")
+_PPO_KEYS = {"lr", "gamma", "lambda_", "clip_param", "vf_clip_param", "vf_loss_coeff", "entropy_coeff", "kl_coeff",
+             "kl_target", "use_kl_loss", "use_gae", "grad_clip", "train_batch_size_per_learner", "minibatch_size",
+             "num_epochs", "shuffle_batch_per_epoch"}
+_MODEL_KEYS = {"fcnet_hiddens", "fcnet_activation", "vf_share_layers", "free_log_std", "log_std_clip_param",
+               "fcnet_use_layernorm"}
+_TOP_KEYS = {"n_timesteps", "iterations", "num_env_runners", "num_envs_per_env_runner", "num_cpus_per_env_runner",
+             "checkpoint_every", "reward_scale", "training", "model", "env_kwargs", "learning", "policies"}
+
+
+class ClusterUnreachableError(ConnectionError):
+    """The Ray cluster named by ``--address`` cannot be reached."""
+
+
+def require_rllib() -> None:
+    """Raise MissingDependencyError (with the install command) unless Ray RLlib and torch import."""
+    try:
+        import ray  # noqa: F401
+        import ray.rllib  # noqa: F401
+        import torch  # noqa: F401
+    except ImportError as exc:
+        raise MissingDependencyError(
+            f"the RLlib backend needs Ray RLlib, which is not installed here ({exc}); install the optional "
+            f"extra with: {DISTRIBUTED_INSTALL}") from exc
+
+
+# ------------------------------------------------------------------------------------------ config
+@dataclass
+class RLlibTrainConfig:
+    """Everything that defines an RLlib run (saved as ``config.yaml`` in the run directory)."""
+
+    scenario: str
+    action_mode: str = "residual"
+    seed: int = 0
+    learning: str = "followers"
+    policies: str = "shared"
+    n_timesteps: int = 1_000_000
+    iterations: int | None = None
+    num_env_runners: int = 2
+    num_envs_per_env_runner: int = 1
+    num_cpus_per_env_runner: int = 1
+    checkpoint_every: int = 10
+    reward_scale: float = 1.0
+    training: dict = field(default_factory=dict)
+    model: dict = field(default_factory=dict)
+    env_kwargs: dict = field(default_factory=dict)
+
+    def __post_init__(self) -> None:
+        from formation_env.scenarios import scenario_names
+
+        from .config import ACTION_MODES
+
+        if self.scenario not in scenario_names():
+            raise ValueError(f"unknown scenario {self.scenario!r}; available: {scenario_names()}")
+        if self.action_mode not in ACTION_MODES:
+            raise ValueError(f"unknown action mode {self.action_mode!r}; choose one of {ACTION_MODES}")
+        if self.learning not in LEARNING_MODES:
+            raise ValueError(f"learning must be one of {LEARNING_MODES}, got {self.learning!r}")
+        if self.policies not in POLICY_MODES:
+            raise ValueError(f"policies must be one of {POLICY_MODES}, got {self.policies!r}")
+        for name, low in (("seed", 0), ("n_timesteps", 1), ("num_env_runners", 0), ("num_envs_per_env_runner", 1),
+                          ("num_cpus_per_env_runner", 0), ("checkpoint_every", 0), ("iterations", 1)):
+            v = getattr(self, name)
+            if v is None and name == "iterations":
+                continue
+            if isinstance(v, float) and math.isfinite(v) and v.is_integer():
+                v = int(v)
+                setattr(self, name, v)
+            if isinstance(v, bool) or not isinstance(v, int) or v < low:
+                raise ValueError(f"{name} must be an integer >= {low}, got {v!r}")
+        if isinstance(self.reward_scale, bool) or not isinstance(self.reward_scale, (int, float)) \
+                or not math.isfinite(self.reward_scale) or self.reward_scale <= 0:
+            raise ValueError(f"reward_scale must be a finite number > 0, got {self.reward_scale!r}")
+        for name, valid in (("training", _PPO_KEYS), ("model", _MODEL_KEYS), ("env_kwargs", _ENV_KEYS - {"learning"})):
+            value = getattr(self, name)
+            if not isinstance(value, dict):
+                raise ValueError(f"{name} must be a mapping, got {type(value).__name__}")
+            bad = sorted(set(value) - valid)
+            if bad:
+                raise ValueError(f"unknown {name} key(s) {bad}; valid: {sorted(valid)}")
+        # Validates the environment options here, without ray (the env itself is built on the runners).
+        from formation_env.scenarios import get_scenario
+
+        make_env_config(SimpleNamespace(scenario=self.scenario, action_mode=self.action_mode,
+                                        env_kwargs=self.env_kwargs), learning=self.learning)
+        if self.learning == "followers" and not get_scenario(self.scenario).slots:
+            raise ValueError(f"scenario {self.scenario!r} flies one UAV: there are no followers to learn "
+                             "(use learning='all')")
+
+    @property
+    def modules(self) -> list[str]:
+        """The RLModule ids this run trains."""
+        if self.policies == "shared":
+            return ["shared"]
+        return (["leader"] if self.learning == "all" else []) + ["follower"]
+
+    @classmethod
+    def from_hyperparams(cls, params: dict, **given) -> RLlibTrainConfig:
+        p = copy.deepcopy(params)
+        bad = sorted(set(p) - _TOP_KEYS)
+        if bad:
+            raise ValueError(f"unknown RLlib hyperparameter key(s) {bad}; valid: {sorted(_TOP_KEYS)}")
+        p.update({k: v for k, v in given.items() if v is not None})
+        return cls(**p)
+
+    def to_dict(self) -> dict:
+        return asdict(self)
+
+
+def load_rllib_hyperparams(scenario: str, config_file: str | Path | None = None) -> dict:
+    """``train/hyperparams/rllib_ppo.yml`` for ``scenario``, with ``config_file`` merged over it."""
+    params = _section(load_yaml(HYPERPARAMS_DIR / "rllib_ppo.yml"), scenario)
+    if config_file is not None:
+        params = _merge(params, _section(load_yaml(config_file), scenario))
+    return params
+
+
+def env_config_dict(cfg: RLlibTrainConfig) -> dict:
+    """The ``env_config`` RLlib hands to ``FormationMultiAgentEnv`` on every env runner."""
+    return {"scenario": cfg.scenario, "action_mode": cfg.action_mode, "learning": cfg.learning,
+            "env_kwargs": copy.deepcopy(cfg.env_kwargs), "reward_scale": cfg.reward_scale}
+
+
+def checkpoint_metadata(cfg: RLlibTrainConfig, *, iteration: int, env_steps: int) -> dict:
+    """What ``formation-env evaluate`` needs to fly a checkpoint (stored beside RLlib's own files)."""
+    import ray
+
+    env = make_env_config(SimpleNamespace(scenario=cfg.scenario, action_mode=cfg.action_mode,
+                                          env_kwargs=cfg.env_kwargs), learning=cfg.learning)
+    return {"backend": "rllib", "algo": "ppo", "scenario": cfg.scenario, "action_mode": cfg.action_mode,
+            "learning": cfg.learning, "policies": cfg.policies, "modules": cfg.modules, "control_hz": env.control_hz,
+            "seed": cfg.seed, "iteration": int(iteration), "env_steps": int(env_steps), "ray_version": ray.__version__}
+
+
+# ------------------------------------------------------------------------------------------ Ray
+def parse_address(address: str | None):
+    """``None`` (a local instance), ``"auto"`` or ``(host, port)``; ValueError naming a malformed one."""
+    if address is None or address == "local":
+        return None
+    if not isinstance(address, str) or not address.strip():
+        raise ValueError(f"--address must be 'auto', 'local' or HOST:PORT, got {address!r}")
+    address = address.strip()
+    if address == "auto":
+        return "auto"
+    host, sep, port = address.rpartition(":")
+    host = host.strip("[]")
+    if not sep or not host or not port.isdigit() or not 0 < int(port) < 65536:
+        raise ValueError(f"--address must be 'auto', 'local' or HOST:PORT (e.g. 10.0.0.5:6379), got {address!r}")
+    return host, int(port)
+
+
+# The HTTP/2 client preface and an empty SETTINGS frame: a gRPC server (Ray's GCS is one) answers with
+# a SETTINGS frame (9-byte header, type 4); an HTTP/1 server, a dashboard or a database answers otherwise.
+_H2_PREFACE = b"PRI * HTTP/2.0\r\n\r\nSM\r\n\r\n" + b"\x00\x00\x00\x04\x00\x00\x00\x00\x00"
+
+
+def check_reachable(host: str, port: int, timeout_s: float = 5.0) -> None:
+    """Check that ``host:port`` accepts TCP connections and speaks gRPC, as a Ray head's GCS port
+    does, so that a wrong address fails in seconds with a clear message (``ray.init`` itself retries
+    for about a minute on a closed port, and for longer on a port where something else listens)."""
+    try:
+        with socket.create_connection((host, port), timeout=timeout_s) as sock:
+            sock.settimeout(timeout_s)
+            sock.sendall(_H2_PREFACE)
+            head = b""
+            try:
+                while len(head) < 9 and (chunk := sock.recv(9 - len(head))):
+                    head += chunk
+            except (socket.timeout, ConnectionResetError):
+                pass
+    except OSError as exc:
+        reason = exc.strerror or type(exc).__name__
+        raise ClusterUnreachableError(
+            f"cannot reach a Ray cluster at {host}:{port} ({reason}). Start its head node with "
+            f"`ray start --head --port={port}`, check that this machine can reach that port, or leave out "
+            f"--address to train on a local Ray instance") from exc
+    if len(head) < 9 or head[3] != 0x04:
+        raise ClusterUnreachableError(
+            f"{host}:{port} accepts connections but is not a Ray head's GCS port (it does not speak gRPC; "
+            f"answered {head[:16]!r}). Give the port the head was started with (`ray start --head --port=P`, "
+            "6379 by default); the dashboard (8265) and Ray Client (10001) ports are not it")
+
+
+def _use_cluster_token() -> None:
+    """Ray >= 2.5x protects clusters with a token, but a process joining one only sends it when
+    RAY_AUTH_MODE=token; when a token is at hand (RAY_AUTH_TOKEN, RAY_AUTH_TOKEN_PATH or
+    ~/.ray/auth_token, the head's copy) and the mode is unset, send it."""
+    if os.environ.get("RAY_AUTH_MODE") is not None:
+        return  # the user chose
+    try:  # Ray's own switch also refreshes its cached config, which an env variable alone does not
+        from ray._private.authentication.authentication_token_setup import (
+            maybe_enable_token_auth_if_token_available,
+        )
+    except ImportError:  # a Ray without token auth: nothing to send
+        return
+    maybe_enable_token_auth_if_token_available(warn_if_disabled=False)
+
+
+def _join(address: str, label: str) -> None:
+    import ray
+
+    _use_cluster_token()
+    try:
+        ray.init(address=address, logging_level="ERROR")
+    except (ConnectionError, TimeoutError, RuntimeError) as exc:
+        chain, e = [], exc
+        while e is not None:
+            chain.append(f"{type(e).__name__}: {e}")
+            e = e.__cause__ or e.__context__
+        text = " <- ".join(chain)
+        if "auth" in text.lower() and "token" in text.lower():
+            raise ClusterUnreachableError(
+                f"the Ray cluster at {label} refused this machine's authentication token: copy the head's "
+                "~/.ray/auth_token here (or set RAY_AUTH_TOKEN) and set RAY_AUTH_MODE=token") from exc
+        if label == "auto":
+            raise ClusterUnreachableError(
+                "--address auto: no running Ray cluster found on this machine (start one with `ray start --head`, "
+                "join this machine with `ray start --address=HEAD:6379`, set RAY_ADDRESS, or leave out --address "
+                f"for a local instance): {exc}") from exc
+        raise ClusterUnreachableError(f"could not join the Ray cluster at {label}: {text[:600]}") from exc
+
+
+def connect(address: str | None = None, *, num_cpus: int | None = None, log: Callable[[str], None] = print) -> bool:
+    """Connect to (or start) Ray. Returns True when this call started a local instance (the caller
+    shuts it down). A Ray already initialised in this process is reused as it is."""
+    require_rllib()
+    import ray
+
+    target = parse_address(address)
+    if ray.is_initialized():
+        return False
+    if num_cpus is not None and target is not None:
+        raise ValueError("--num-cpus applies only to a local Ray instance (without --address); a cluster has "
+                         "the CPUs its nodes were started with")
+    if target is None:
+        # A private instance: loopback only, no dashboard (nothing listens beyond this machine).
+        ray.init(num_cpus=num_cpus, include_dashboard=False, _node_ip_address="127.0.0.1",
+                 logging_level="ERROR", configure_logging=True)
+        log(f"started a local Ray instance ({int(ray.cluster_resources().get('CPU', 0))} CPUs, 127.0.0.1)")
+        return True
+    if target == "auto":
+        _join("auto", "auto")
+    else:
+        host, port = target
+        check_reachable(host, port)
+        _join(f"{host}:{port}", f"{host}:{port}")
+    res = ray.cluster_resources()
+    log(f"joined the Ray cluster at {address} ({len(ray.nodes())} node(s), {int(res.get('CPU', 0))} CPUs)")
+    return False
+
+
+# ------------------------------------------------------------------------------------------ algorithm
+def build_algo_config(cfg: RLlibTrainConfig):
+    """The PPOConfig of a run: the PettingZoo env through RLlib, shared or per-role policies."""
+    from ray.rllib.algorithms.ppo import PPOConfig
+    from ray.rllib.core.rl_module.default_model_config import DefaultModelConfig
+    from ray.rllib.core.rl_module.multi_rl_module import MultiRLModuleSpec
+    from ray.rllib.core.rl_module.rl_module import RLModuleSpec
+
+    from .rllib_env import FormationMultiAgentEnv, role_policy, shared_policy
+
+    mapping = shared_policy if cfg.policies == "shared" else role_policy
+    return (
+        PPOConfig()
+        .environment(FormationMultiAgentEnv, env_config=env_config_dict(cfg))
+        .env_runners(num_env_runners=cfg.num_env_runners, num_envs_per_env_runner=cfg.num_envs_per_env_runner,
+                     num_cpus_per_env_runner=cfg.num_cpus_per_env_runner, rollout_fragment_length="auto")
+        .multi_agent(policies=set(cfg.modules), policy_mapping_fn=mapping)
+        .rl_module(rl_module_spec=MultiRLModuleSpec(rl_module_specs={m: RLModuleSpec() for m in cfg.modules}),
+                   model_config=DefaultModelConfig(**cfg.model))
+        .training(**cfg.training)
+        .debugging(seed=cfg.seed, log_level="ERROR")
+    )
+
+
+def latest_rllib_checkpoint(run_dir: str | Path) -> tuple[Path, int] | None:
+    ckdir = Path(run_dir) / "checkpoints"
+    if not ckdir.is_dir():
+        return None
+    found = [(int(m.group(1)), p) for p in ckdir.iterdir() if (m := _CKPT.match(p.name)) and p.is_dir()]
+    if not found:
+        return None
+    it, path = max(found)
+    return path, it
+
+
+def is_rllib_checkpoint(path: str | Path) -> bool:
+    """An RLlib checkpoint directory written by this backend, or a run directory holding one."""
+    p = Path(path)
+    return (p / CHECKPOINT_META).is_file() or (p.is_dir() and latest_rllib_checkpoint(p) is not None)
+
+
+def _save_checkpoint(algo, cfg: RLlibTrainConfig, run_dir: Path, env_steps: int) -> Path:
+    """``algo.save_to_path`` into a temporary directory beside the final one, then rename: a reader
+    never sees half a checkpoint, and an existing checkpoint is never replaced."""
+    ckdir = run_dir / "checkpoints"
+    ckdir.mkdir(parents=True, exist_ok=True)
+    final = ckdir / f"iter_{algo.iteration:06d}"
+    if final.exists():
+        raise FileExistsError(f"checkpoint {str(final)!r} exists already; not overwriting it")
+    tmp = Path(tempfile.mkdtemp(prefix=f".{final.name}.", dir=ckdir))
+    try:
+        algo.save_to_path(str(tmp))
+        meta = checkpoint_metadata(cfg, iteration=algo.iteration, env_steps=env_steps)
+        (tmp / CHECKPOINT_META).write_text(json.dumps(meta, indent=2) + "\n")
+        os.chmod(tmp, 0o755)
+        os.replace(tmp, final)
+    finally:
+        if tmp.exists():
+            import shutil
+
+            shutil.rmtree(tmp, ignore_errors=True)
+    return final
+
+
+_PROGRESS_COLUMNS = ("iteration", "env_steps_lifetime", "env_steps", "agent_steps", "episodes", "episode_return_mean",
+                     "episode_len_mean", "iteration_s", "sample_s", "env_steps_per_s")
+
+
+def _progress_row(result: dict, reward_scale: float) -> dict:
+    er = result.get("env_runners", {})
+    agent_steps = er.get("num_agent_steps_sampled", {}) or {}
+    ret = er.get("episode_return_mean")
+    sample_s = float(result.get("timers", {}).get("env_runner_sampling_timer", float("nan")))
+    env_steps = int(er.get("num_env_steps_sampled", 0) or 0)
+    return {
+        "iteration": int(result["training_iteration"]),
+        "env_steps_lifetime": int(er.get("num_env_steps_sampled_lifetime", 0) or 0),
+        "env_steps": env_steps,
+        "agent_steps": int(sum(int(v) for v in agent_steps.values())),
+        "episodes": int(er.get("num_episodes", 0) or 0),
+        # Returns are per agent and per episode, unscaled (the learner saw them x reward_scale).
+        "episode_return_mean": (round(float(ret) / reward_scale / max(len(agent_steps), 1), 6)
+                                if ret is not None and np.isfinite(ret) else ""),
+        "episode_len_mean": round(float(er["episode_len_mean"]), 1) if er.get("episode_len_mean") is not None else "",
+        "iteration_s": round(float(result.get("time_this_iter_s", float("nan"))), 3),
+        "sample_s": round(sample_s, 3),
+        "env_steps_per_s": round(env_steps / sample_s, 1) if sample_s > 0 else "",
+    }
+
+
+def _write_progress(run_dir: Path, rows: list[dict]) -> None:
+    from formation_env.io import atomic_write_text
+
+    buf = io.StringIO()
+    w = csv.DictWriter(buf, fieldnames=_PROGRESS_COLUMNS, lineterminator="\n")
+    w.writeheader()
+    w.writerows(rows)
+    atomic_write_text(run_dir / "progress.csv", buf.getvalue(), overwrite=True)
+
+
+def _read_progress(run_dir: Path, upto_iteration: int) -> list[dict]:
+    path = run_dir / "progress.csv"
+    if not path.is_file():
+        return []
+    with path.open() as fh:
+        return [r for r in csv.DictReader(fh) if int(r["iteration"]) <= upto_iteration]
+
+
+def train_rllib(*, scenario: str | None = None, action_mode: str | None = None, seed: int | None = None,
+                steps: int | None = None, iterations: int | None = None, policies: str | None = None,
+                learning: str | None = None, num_env_runners: int | None = None,
+                num_envs_per_env_runner: int | None = None, address: str | None = None, num_cpus: int | None = None,
+                config_file: str | Path | None = None, out_dir: str | Path | None = None, overwrite: bool = False,
+                resume: bool = False, overrides: dict | None = None, log: Callable[[str], None] | None = None,
+                command: str | None = None) -> dict:
+    """Train (or resume) one RLlib run; returns its summary. ``overrides``: hyperparameters merged
+    last (the YAML format; the tests use it for tiny runs). On ``resume`` the run's own configuration
+    is used; ``steps``/``iterations`` extend it and ``num_env_runners`` may change."""
+    import yaml
+
+    from formation_env.io import atomic_write_text, prepare_output_dir
+
+    log = log or (lambda msg: print(msg, flush=True))
+    parse_address(address)  # a malformed address fails before anything starts
+    require_rllib()
+    if resume:
+        if out_dir is None:
+            raise ValueError("--resume needs --out RUN_DIR (the run to continue)")
+        run_dir = Path(out_dir)
+        if not (run_dir / "config.yaml").is_file():
+            raise ValueError(f"cannot resume: {str(run_dir)!r} holds no config.yaml (not a training run directory)")
+        saved = yaml.safe_load((run_dir / "config.yaml").read_text())
+        if saved.get("backend") != "rllib":
+            raise ValueError(f"cannot resume {str(run_dir)!r} with --backend rllib: it is not an RLlib run")
+        data = saved["config"]
+        for name, given in (("scenario", scenario), ("action_mode", action_mode), ("policies", policies),
+                            ("learning", learning), ("seed", seed)):
+            if given is not None and given != data.get(name):
+                raise ValueError(f"--resume: {name} {given!r} differs from the run's {data.get(name)!r}")
+        for name, given in (("n_timesteps", steps), ("iterations", iterations), ("num_env_runners", num_env_runners),
+                            ("num_envs_per_env_runner", num_envs_per_env_runner)):
+            if given is not None:
+                data[name] = given
+        cfg = RLlibTrainConfig(**data)
+        ck = latest_rllib_checkpoint(run_dir)
+        if ck is None:
+            raise ValueError(f"cannot resume: no checkpoint in {str(run_dir / 'checkpoints')!r}")
+    else:
+        if scenario is None:
+            raise ValueError("give --scenario")
+        params = load_rllib_hyperparams(scenario, config_file)
+        if overrides:
+            params = _merge(params, overrides)
+        cfg = RLlibTrainConfig.from_hyperparams(
+            params, scenario=scenario, action_mode=action_mode, seed=seed, n_timesteps=steps, iterations=iterations,
+            policies=policies, learning=learning, num_env_runners=num_env_runners,
+            num_envs_per_env_runner=num_envs_per_env_runner)
+        run_dir = Path(out_dir) if out_dir is not None else Path("runs") / (
+            f"{cfg.scenario}-rllib-ppo-{cfg.policies}-seed{cfg.seed}-{time.strftime('%Y%m%d-%H%M%S')}")
+        if run_dir.exists() and not overwrite and (not run_dir.is_dir() or any(run_dir.iterdir())):
+            prepare_output_dir(run_dir, overwrite=False)  # raises its clear error before Ray starts
+        ck = None
+
+    started = connect(address, num_cpus=num_cpus, log=log)
+    try:
+        if ck is None:  # created only once Ray is up, so a failed connection leaves nothing behind
+            run_dir = prepare_output_dir(run_dir, overwrite=overwrite)
+            atomic_write_text(run_dir / "config.yaml", yaml.safe_dump(
+                {"backend": "rllib", "command": command, "config": cfg.to_dict()}, sort_keys=False), overwrite=True)
+        return _train_loop(cfg, run_dir, ck, log)
+    finally:
+        if started:
+            import ray
+
+            ray.shutdown()
+
+
+def _done(cfg: RLlibTrainConfig, iteration: int, env_steps: int) -> bool:
+    return env_steps >= cfg.n_timesteps or (cfg.iterations is not None and iteration >= cfg.iterations)
+
+
+def _train_loop(cfg: RLlibTrainConfig, run_dir: Path, ck, log) -> dict:
+    from formation_env.io import atomic_write_json
+
+    algo = build_algo_config(cfg).build_algo()
+    try:
+        rows: list[dict] = []
+        start_iter, env_steps = 0, 0
+        if ck is not None:
+            path, it = ck
+            algo.restore_from_path(str(path))
+            meta = json.loads((path / CHECKPOINT_META).read_text())
+            start_iter, env_steps = algo.iteration, int(meta["env_steps"])
+            if start_iter != it:
+                raise RuntimeError(f"restored iteration {start_iter} differs from the checkpoint's name {path.name}")
+            if _done(cfg, start_iter, env_steps):
+                raise ValueError(f"the run is already at iteration {start_iter} / {env_steps} env steps; give a larger "
+                                 "--iterations or --steps to continue it")
+            rows = _read_progress(run_dir, start_iter)
+            log(f"resuming {run_dir} from {path.name} ({env_steps} env steps)")
+        log(f"training RLlib PPO ({cfg.policies} policies: {', '.join(cfg.modules)}) on {cfg.scenario} "
+            f"({cfg.action_mode} actions, {cfg.learning} learn), seed {cfg.seed}, {cfg.num_env_runners} env runner(s) "
+            f"-> {run_dir}")
+        t0 = time.perf_counter()
+        last_ck = ck[0] if ck else None
+        while not _done(cfg, algo.iteration, env_steps):
+            result = algo.train()
+            row = _progress_row(result, cfg.reward_scale)
+            env_steps = row["env_steps_lifetime"]
+            rows.append(row)
+            _write_progress(run_dir, rows)
+            log(f"iter {row['iteration']:4d}  env steps {env_steps:9d}  return/agent {row['episode_return_mean'] or '-':>10}"
+                f"  {row['env_steps_per_s'] or '-'} env steps/s sampled")
+            if cfg.checkpoint_every and algo.iteration % cfg.checkpoint_every == 0:
+                last_ck = _save_checkpoint(algo, cfg, run_dir, env_steps)
+        if last_ck is None or last_ck.name != f"iter_{algo.iteration:06d}":
+            last_ck = _save_checkpoint(algo, cfg, run_dir, env_steps)
+        wall = time.perf_counter() - t0
+        new = rows[len(rows) - (algo.iteration - start_iter):] if algo.iteration > start_iter else []
+        sampled = sum(int(r["env_steps"]) for r in new)
+        sample_s = sum(float(r["sample_s"]) for r in new)
+        summary = {"run_dir": str(run_dir), "backend": "rllib", "scenario": cfg.scenario, "policies": cfg.policies,
+                   "modules": cfg.modules, "seed": cfg.seed, "iterations": algo.iteration, "env_steps": env_steps,
+                   "resumed_from_iteration": start_iter or None, "num_env_runners": cfg.num_env_runners,
+                   "wall_s": round(wall, 1), "env_steps_per_s": round(sampled / wall, 1) if wall > 0 else None,
+                   "env_steps_per_s_sampling": round(sampled / sample_s, 1) if sample_s > 0 else None,
+                   "checkpoint": str(last_ck)}
+        name = "summary.json" if not start_iter else f"summary-resume-{start_iter}.json"
+        atomic_write_json(run_dir / name, summary, overwrite=True)
+        log(f"done in {wall:.0f} s: iteration {algo.iteration}, {env_steps} env steps -> {last_ck}")
+        return summary
+    finally:
+        algo.stop()
+
+
+# ------------------------------------------------------------------------------------------ inference
+def load_rllib_policy(spec: str | Path, *, name: str | None = None, module_id: str | None = None):
+    """An ``EvalPolicy`` flying the follower (or shared) RLModule of an RLlib checkpoint written by
+    this backend; ``spec`` may also be a run directory (its latest checkpoint). Deterministic: the mean
+    of the Gaussian, clipped to the [-1, 1] action box (RLlib's unsquashing is the identity on it)."""
+    require_rllib()
+    import torch
+    from ray.rllib.core.rl_module.rl_module import RLModule
+
+    from .evaluate import EvalPolicy
+
+    path = Path(spec)
+    if not (path / CHECKPOINT_META).is_file():
+        ck = latest_rllib_checkpoint(path) if path.is_dir() else None
+        if ck is None:
+            raise ValueError(f"{str(spec)!r} is not an RLlib checkpoint of this project (no {CHECKPOINT_META}) nor a "
+                             "run directory holding one")
+        path = ck[0]
+    meta = json.loads((path / CHECKPOINT_META).read_text())
+    modules = meta["modules"]
+    module_id = module_id or ("follower" if "follower" in modules else "shared")
+    if module_id not in modules:
+        raise ValueError(f"checkpoint {str(path)!r} has no module {module_id!r}; it has {modules}")
+    module = RLModule.from_checkpoint(str(path / "learner_group" / "learner" / "rl_module" / module_id))
+    dist_cls = module.get_inference_action_dist_cls()
+
+    def act(obs: np.ndarray) -> np.ndarray:
+        x = torch.from_numpy(np.ascontiguousarray(obs, dtype=np.float32))
+        with torch.no_grad():
+            out = module.forward_inference({"obs": x})
+            a = dist_cls.from_logits(out["action_dist_inputs"]).to_deterministic().sample()
+        return np.clip(a.numpy(), -1.0, 1.0)
+
+    label = name or f"rllib-{Path(meta.get('run_dir') or path.parent.parent).name}-{path.name}"
+    return EvalPolicy(label, meta["action_mode"], act, float(meta.get("control_hz", 10.0)), str(path))
+
+
+# ------------------------------------------------------------------------------------------ benchmark
+def benchmark_sampling(runner_counts=(1, 2), *, scenario: str = "formation_keeping", action_mode: str = "residual",
+                       iterations: int = 4, batch: int = 2000, num_cpus: int | None = None, address: str | None = None,
+                       log: Callable[[str], None] = print) -> dict:
+    """Env steps/s sampled by RLlib with each number of env runners: one fresh Algorithm per count,
+    ``iterations`` PPO iterations of ``batch`` env steps, the first dropped (actor start, JIT warm-up),
+    throughput = env steps sampled / time in sampling (RLlib's env_runner_sampling_timer)."""
+    started = connect(address, num_cpus=num_cpus, log=log)
+    out = {"scenario": scenario, "action_mode": action_mode, "batch_env_steps": batch, "iterations": iterations,
+           "cpus": os.cpu_count(), "results": {}}
+    try:
+        for n in runner_counts:
+            cfg = RLlibTrainConfig(scenario=scenario, action_mode=action_mode, num_env_runners=n, checkpoint_every=0,
+                                   training={"train_batch_size_per_learner": batch, "minibatch_size": 500,
+                                             "num_epochs": 1},
+                                   model={"fcnet_hiddens": [64, 64]})
+            algo = build_algo_config(cfg).build_algo()
+            try:
+                rows = [_progress_row(algo.train(), 1.0) for _ in range(iterations)][1:]
+            finally:
+                algo.stop()
+            steps = sum(r["env_steps"] for r in rows)
+            sample_s = sum(r["sample_s"] for r in rows)
+            iter_s = sum(r["iteration_s"] for r in rows)
+            out["results"][n] = {"env_steps_per_s_sampling": round(steps / sample_s, 1),
+                                 "env_steps_per_s_training": round(steps / iter_s, 1), "env_steps": steps}
+            log(f"{n} env runner(s): {steps / sample_s:.0f} env steps/s sampled, {steps / iter_s:.0f} env steps/s "
+                "including the PPO update")
+    finally:
+        if started:
+            import ray
+
+            ray.shutdown()
+    return out
