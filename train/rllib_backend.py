@@ -600,6 +600,7 @@ def benchmark_sampling(runner_counts=(1, 2), *, scenario: str = "formation_keepi
     try:
         for n in runner_counts:
             cfg = RLlibTrainConfig(scenario=scenario, action_mode=action_mode, num_env_runners=n, checkpoint_every=0,
+                                   env_kwargs=load_rllib_hyperparams(scenario).get("env_kwargs", {}),
                                    training={"train_batch_size_per_learner": batch, "minibatch_size": 500,
                                              "num_epochs": 1},
                                    model={"fcnet_hiddens": [64, 64]})

@@ -15,10 +15,18 @@ def register(sub) -> None:
     p = sub.add_parser("bench", help="measure ELL and dynamics speed (medians of repeated runs)")
     p.add_argument("--json", action="store_true", help="print JSON")
     p.add_argument("--quick", action="store_true", help="fewer repeats (for smoke tests)")
+    p.add_argument("--rllib", action="store_true",
+                   help="instead: RLlib env steps/s sampled with 1 and 2 env runners (needs the 'distributed' extra)")
+    p.add_argument("--runners", type=int, nargs="+", default=[1, 2], help="env runner counts for --rllib (default 1 2)")
+    p.add_argument("--action-mode", default="residual", choices=("surfaces", "residual", "setpoints"),
+                   help="action mode for --rllib (default residual)")
+    p.add_argument("--address", default=None, help="Ray cluster for --rllib (default: a local instance)")
     p.set_defaults(func=run)
 
 
 def run(args) -> int:
+    if args.rllib:
+        return _run_rllib(args)
     results = {"machine": {"cpus": os.cpu_count(), "python": platform.python_version(), "platform": platform.platform()}}
     for name, module in import_available(BENCH_MODULES).items():
         results[name.split(".")[1]] = module.run_benchmarks(quick=args.quick)
@@ -45,3 +53,16 @@ def _print_human(results: dict) -> None:
         if key not in ("machine", "wake"):
             print(f"{key}:")
             print("  " + json.dumps(value, indent=2).replace("\n", "\n  "))
+
+
+def _run_rllib(args) -> int:
+    from train.rllib_backend import benchmark_sampling
+
+    if any(n < 0 for n in args.runners):
+        raise ValueError(f"--runners must be integers >= 0, got {args.runners}")
+    res = benchmark_sampling(tuple(args.runners), action_mode=args.action_mode, address=args.address,
+                             iterations=3 if args.quick else 6, batch=1000 if args.quick else 2000,
+                             log=(lambda m: None) if args.json else print)
+    if args.json:
+        print(json.dumps(res, indent=2))
+    return 0
