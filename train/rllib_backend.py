@@ -389,6 +389,7 @@ def _progress_row(result: dict, reward_scale: float) -> dict:
     ret = er.get("episode_return_mean")
     sample_s = float(result.get("timers", {}).get("env_runner_sampling_timer", float("nan")))
     env_steps = int(er.get("num_env_steps_sampled", 0) or 0)
+    iteration_s = float(result.get("time_this_iter_s", float("nan")))
     return {
         "iteration": int(result["training_iteration"]),
         "env_steps_lifetime": int(er.get("num_env_steps_sampled_lifetime", 0) or 0),
@@ -399,9 +400,9 @@ def _progress_row(result: dict, reward_scale: float) -> dict:
         "episode_return_mean": (round(float(ret) / reward_scale / max(len(agent_steps), 1), 6)
                                 if ret is not None and np.isfinite(ret) else ""),
         "episode_len_mean": round(float(er["episode_len_mean"]), 1) if er.get("episode_len_mean") is not None else "",
-        "iteration_s": round(float(result.get("time_this_iter_s", float("nan"))), 3),
-        "sample_s": round(sample_s, 3),
-        "env_steps_per_s": round(env_steps / sample_s, 1) if sample_s > 0 else "",
+        "iteration_s": round(iteration_s, 3),
+        "sample_s": round(sample_s, 3),  # RLlib's env_runner_sampling_timer (a smoothed mean over iterations)
+        "env_steps_per_s": round(env_steps / iteration_s, 1) if iteration_s > 0 else "",  # sampling + update
     }
 
 
@@ -527,7 +528,7 @@ def _train_loop(cfg: RLlibTrainConfig, run_dir: Path, ck, log) -> dict:
             rows.append(row)
             _write_progress(run_dir, rows)
             log(f"iter {row['iteration']:4d}  env steps {env_steps:9d}  return/agent {row['episode_return_mean'] or '-':>10}"
-                f"  {row['env_steps_per_s'] or '-'} env steps/s sampled")
+                f"  {row['env_steps_per_s'] or '-'} env steps/s")
             if cfg.checkpoint_every and algo.iteration % cfg.checkpoint_every == 0:
                 last_ck = _save_checkpoint(algo, cfg, run_dir, env_steps)
         if last_ck is None or last_ck.name != f"iter_{algo.iteration:06d}":
@@ -535,12 +536,10 @@ def _train_loop(cfg: RLlibTrainConfig, run_dir: Path, ck, log) -> dict:
         wall = time.perf_counter() - t0
         new = rows[len(rows) - (algo.iteration - start_iter):] if algo.iteration > start_iter else []
         sampled = sum(int(r["env_steps"]) for r in new)
-        sample_s = sum(float(r["sample_s"]) for r in new)
         summary = {"run_dir": str(run_dir), "backend": "rllib", "scenario": cfg.scenario, "policies": cfg.policies,
                    "modules": cfg.modules, "seed": cfg.seed, "iterations": algo.iteration, "env_steps": env_steps,
                    "resumed_from_iteration": start_iter or None, "num_env_runners": cfg.num_env_runners,
                    "wall_s": round(wall, 1), "env_steps_per_s": round(sampled / wall, 1) if wall > 0 else None,
-                   "env_steps_per_s_sampling": round(sampled / sample_s, 1) if sample_s > 0 else None,
                    "checkpoint": str(last_ck)}
         name = "summary.json" if not start_iter else f"summary-resume-{start_iter}.json"
         atomic_write_json(run_dir / name, summary, overwrite=True)
@@ -588,34 +587,58 @@ def load_rllib_policy(spec: str | Path, *, name: str | None = None, module_id: s
 
 
 # ------------------------------------------------------------------------------------------ benchmark
+def _sample_env_steps(runner, num_timesteps: int) -> int:
+    """Runs on an env runner: sample ``num_timesteps`` env steps with the current policy and count them."""
+    return int(sum(ep.env_steps() for ep in runner.sample(num_timesteps=num_timesteps)))
+
+
 def benchmark_sampling(runner_counts=(1, 2), *, scenario: str = "formation_keeping", action_mode: str = "residual",
-                       iterations: int = 4, batch: int = 2000, num_cpus: int | None = None, address: str | None = None,
+                       rounds: int = 5, batch: int = 2000, num_envs_per_env_runner: int = 1,
+                       num_cpus: int | None = None, address: str | None = None,
                        log: Callable[[str], None] = print) -> dict:
-    """Env steps/s sampled by RLlib with each number of env runners: one fresh Algorithm per count,
-    ``iterations`` PPO iterations of ``batch`` env steps, the first dropped (actor start, JIT warm-up),
-    throughput = env steps sampled / time in sampling (RLlib's env_runner_sampling_timer)."""
+    """Env steps/s RLlib samples with each number of env runners, the training's env options
+    (Dryden turbulence, initial offsets, wake).
+
+    For each count a fresh Algorithm is built; every runner then samples ``batch / n`` env steps at
+    once and the wall time of that parallel call is taken (``rounds`` times after one warm-up round,
+    which absorbs actor start-up and numba cache loading); the median is reported. The same is done for
+    whole PPO iterations (sampling + the driver's update of one epoch), timed by RLlib's
+    ``time_this_iter_s``."""
     started = connect(address, num_cpus=num_cpus, log=log)
-    out = {"scenario": scenario, "action_mode": action_mode, "batch_env_steps": batch, "iterations": iterations,
-           "cpus": os.cpu_count(), "results": {}}
+    out = {"scenario": scenario, "action_mode": action_mode, "batch_env_steps": batch, "rounds": rounds,
+           "num_envs_per_env_runner": num_envs_per_env_runner, "cpus": os.cpu_count(), "results": {}}
     try:
         for n in runner_counts:
             cfg = RLlibTrainConfig(scenario=scenario, action_mode=action_mode, num_env_runners=n, checkpoint_every=0,
+                                   num_envs_per_env_runner=num_envs_per_env_runner,
                                    env_kwargs=load_rllib_hyperparams(scenario).get("env_kwargs", {}),
                                    training={"train_batch_size_per_learner": batch, "minibatch_size": 500,
                                              "num_epochs": 1},
                                    model={"fcnet_hiddens": [64, 64]})
             algo = build_algo_config(cfg).build_algo()
             try:
-                rows = [_progress_row(algo.train(), 1.0) for _ in range(iterations)][1:]
+                per_runner = batch // max(n, 1)
+                group = algo.env_runner_group
+                rates = []
+                for k in range(rounds + 1):
+                    t0 = time.perf_counter()
+                    counts = group.foreach_env_runner(lambda r, m=per_runner: _sample_env_steps(r, m),
+                                                      local_env_runner=n == 0)
+                    dt = time.perf_counter() - t0
+                    if k:
+                        rates.append(sum(counts) / dt)
+                iters = []
+                for k in range(rounds + 1):
+                    res = algo.train()
+                    if k:
+                        iters.append(res["env_runners"]["num_env_steps_sampled"] / res["time_this_iter_s"])
             finally:
                 algo.stop()
-            steps = sum(r["env_steps"] for r in rows)
-            sample_s = sum(r["sample_s"] for r in rows)
-            iter_s = sum(r["iteration_s"] for r in rows)
-            out["results"][n] = {"env_steps_per_s_sampling": round(steps / sample_s, 1),
-                                 "env_steps_per_s_training": round(steps / iter_s, 1), "env_steps": steps}
-            log(f"{n} env runner(s): {steps / sample_s:.0f} env steps/s sampled, {steps / iter_s:.0f} env steps/s "
-                "including the PPO update")
+            out["results"][n] = {"env_steps_per_s_sampling": round(float(np.median(rates)), 1),
+                                 "env_steps_per_s_sampling_all": [round(r, 1) for r in rates],
+                                 "env_steps_per_s_training": round(float(np.median(iters)), 1)}
+            log(f"{n} env runner(s): {np.median(rates):.0f} env steps/s sampled, {np.median(iters):.0f} env steps/s "
+                "in PPO iterations (sampling + update)")
     finally:
         if started:
             import ray

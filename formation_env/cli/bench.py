@@ -20,6 +20,7 @@ def register(sub) -> None:
     p.add_argument("--runners", type=int, nargs="+", default=[1, 2], help="env runner counts for --rllib (default 1 2)")
     p.add_argument("--action-mode", default="residual", choices=("surfaces", "residual", "setpoints"),
                    help="action mode for --rllib (default residual)")
+    p.add_argument("--envs-per-runner", type=int, default=1, help="envs per env runner for --rllib (default 1)")
     p.add_argument("--address", default=None, help="Ray cluster for --rllib (default: a local instance)")
     p.set_defaults(func=run)
 
@@ -60,8 +61,11 @@ def _run_rllib(args) -> int:
 
     if any(n < 0 for n in args.runners):
         raise ValueError(f"--runners must be integers >= 0, got {args.runners}")
+    if args.envs_per_runner < 1:
+        raise ValueError(f"--envs-per-runner must be >= 1, got {args.envs_per_runner}")
     res = benchmark_sampling(tuple(args.runners), action_mode=args.action_mode, address=args.address,
-                             iterations=3 if args.quick else 6, batch=1000 if args.quick else 2000,
+                             num_envs_per_env_runner=args.envs_per_runner,
+                             rounds=2 if args.quick else 5, batch=1000 if args.quick else 2000,
                              log=(lambda m: None) if args.json else print)
     if args.json:
         print(json.dumps(res, indent=2))

@@ -168,6 +168,33 @@ def test_rllib_per_role_policies_train_leader_and_follower(tmp_path, ray_tmpdir,
         load_rllib_policy(ck, module_id="shared")
 
 
+def test_rllib_same_seed_reproduces_the_run_with_two_env_runners(tmp_path, ray_tmpdir, monkeypatch):
+    import ray
+
+    from train.rllib_backend import connect, load_rllib_policy, train_rllib
+
+    monkeypatch.setenv("RAY_TMPDIR", ray_tmpdir)
+    monkeypatch.delenv("RAY_ADDRESS", raising=False)
+    assert connect(None, num_cpus=2, log=lambda m: None)  # one instance for the three runs
+    try:
+        runs = {}
+        for name, seed in (("a", 7), ("b", 7), ("c", 8)):
+            runs[name] = tmp_path / name
+            train_rllib(scenario="formation_keeping", seed=seed, iterations=2, num_env_runners=2, out_dir=runs[name],
+                        overrides=TINY, log=lambda m: None)
+    finally:
+        ray.shutdown()
+    _assert_no_ray_left(ray_tmpdir)
+
+    def returns(run):
+        return [r.split(",")[:6] for r in (run / "progress.csv").read_text().splitlines()[1:]]
+
+    obs = np.random.default_rng(1).normal(size=(16, _obs_size(2))).astype(np.float32)
+    act = {k: load_rllib_policy(v).act(obs) for k, v in runs.items()}
+    assert returns(runs["a"]) == returns(runs["b"]) and np.array_equal(act["a"], act["b"])
+    assert returns(runs["a"]) != returns(runs["c"]) and not np.array_equal(act["a"], act["c"])
+
+
 def _obs_size(n_vehicles: int) -> int:
     from formation_env.envs.observations import observation_size
 
