@@ -29,8 +29,9 @@ Steps are RLlib env steps: one decision of the whole formation (0.1 s). With the
 ``learning="followers"`` in a two-UAV scenario that is one follower decision, the unit of SB3's steps.
 
 Reproducibility: the seed fixes the policy initialisation and every env runner's episode stream
-(runner ``i`` starts from seed ``seed + i``); RLlib samples on several actors concurrently, so a rerun
-with the same seed is close but not guaranteed bit-identical (the SB3 backend is).
+(runner ``i`` starts from seed ``seed + i``). PPO samples synchronously and RLlib gathers the runners'
+episodes in a fixed order, so on CPU a rerun with the same seed reproduces the run (tested with 2 env
+runners); RLlib itself does not promise this across releases.
 """
 
 from __future__ import annotations
