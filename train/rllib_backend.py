@@ -460,6 +460,8 @@ def train_rllib(*, scenario: str | None = None, action_mode: str | None = None, 
                             ("num_envs_per_env_runner", num_envs_per_env_runner)):
             if given is not None:
                 data[name] = given
+        if steps is not None and iterations is None:
+            data["iterations"] = None  # a new --steps alone sets the end; the old iteration cap would stop it at once
         cfg = RLlibTrainConfig(**data)
         ck = latest_rllib_checkpoint(run_dir)
         if ck is None:

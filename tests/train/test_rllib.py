@@ -182,6 +182,13 @@ def test_rllib_same_seed_reproduces_the_run_with_two_env_runners(tmp_path, ray_t
             runs[name] = tmp_path / name
             train_rllib(scenario="formation_keeping", seed=seed, iterations=2, num_env_runners=2, out_dir=runs[name],
                         overrides=TINY, log=lambda m: None)
+        # A resume given only --steps runs to those steps (the first run's iteration cap no longer applies).
+        s = train_rllib(out_dir=tmp_path / "c", resume=True, steps=600, log=lambda m: None)
+        assert s["iterations"] == 3 and s["env_steps"] == 600 and s["resumed_from_iteration"] == 2
+        with pytest.raises(ValueError, match="already at iteration 3"):
+            train_rllib(out_dir=tmp_path / "c", resume=True, steps=600, log=lambda m: None)
+        with pytest.raises(ValueError, match="seed 9 differs"):
+            train_rllib(out_dir=tmp_path / "c", resume=True, seed=9, steps=800, log=lambda m: None)
     finally:
         ray.shutdown()
     _assert_no_ray_left(ray_tmpdir)
