@@ -92,7 +92,11 @@ def load_policy(spec: str, *, action_mode: str | None = None, name: str | None =
 
         if not is_rllib_checkpoint(path):
             raise ValueError(f"policy directory {spec!r} is not an RLlib checkpoint or run directory of this project")
-        return load_rllib_policy(path, name=name)  # its own metadata fixes the action mode
+        pol = load_rllib_policy(path, name=name)
+        if action_mode is not None and action_mode != pol.action_mode:
+            raise ValueError(f"policy {spec!r} was trained with {pol.action_mode!r} actions, not {action_mode!r} "
+                             "(an RLlib checkpoint's metadata fixes its action mode; leave out --action-mode)")
+        return pol
     if not path.is_file():
         raise ValueError(f"policy file {spec!r} does not exist (give an SB3 .zip, an RLlib checkpoint directory "
                          "or 'pid')")

@@ -12,7 +12,8 @@ checkpoints) costs nothing; nothing else in the project imports ray.
 
 Where Ray runs (``address``):
 
-* ``None`` / ``"local"``: a private Ray instance on this machine, bound to 127.0.0.1, stopped at the end;
+* ``None`` / ``"local"``: a private Ray instance on this machine (node address 127.0.0.1, no dashboard,
+  token authentication on, as Ray does by default), stopped at the end;
 * ``"auto"``: the Ray cluster this machine belongs to (``ray start`` was run here, or RAY_ADDRESS);
 * ``"HOST:PORT"``: the head node of an existing cluster (its GCS port, 6379 by default).
 
@@ -53,7 +54,7 @@ from types import SimpleNamespace
 
 import numpy as np
 
-from formation_env.errors import MissingDependencyError
+from formation_env.errors import ClusterUnreachableError, MissingDependencyError
 
 from .config import _ENV_KEYS, HYPERPARAMS_DIR, _merge, _section, load_yaml, make_env_config
 
@@ -73,10 +74,6 @@ _MODEL_KEYS = {"fcnet_hiddens", "fcnet_activation", "vf_share_layers", "free_log
                "fcnet_use_layernorm"}
 _TOP_KEYS = {"n_timesteps", "iterations", "num_env_runners", "num_envs_per_env_runner", "num_cpus_per_env_runner",
              "checkpoint_every", "reward_scale", "training", "model", "env_kwargs", "learning", "policies"}
-
-
-class ClusterUnreachableError(ConnectionError):
-    """The Ray cluster named by ``--address`` cannot be reached."""
 
 
 def require_rllib() -> None:
@@ -101,7 +98,7 @@ class RLlibTrainConfig:
     seed: int = 0
     learning: str = "followers"
     policies: str = "shared"
-    n_timesteps: int = 1_000_000
+    n_timesteps: int | None = 1_000_000
     iterations: int | None = None
     num_env_runners: int = 2
     num_envs_per_env_runner: int = 1
@@ -128,13 +125,15 @@ class RLlibTrainConfig:
         for name, low in (("seed", 0), ("n_timesteps", 1), ("num_env_runners", 0), ("num_envs_per_env_runner", 1),
                           ("num_cpus_per_env_runner", 0), ("checkpoint_every", 0), ("iterations", 1)):
             v = getattr(self, name)
-            if v is None and name == "iterations":
+            if v is None and name in ("iterations", "n_timesteps"):
                 continue
             if isinstance(v, float) and math.isfinite(v) and v.is_integer():
                 v = int(v)
                 setattr(self, name, v)
             if isinstance(v, bool) or not isinstance(v, int) or v < low:
                 raise ValueError(f"{name} must be an integer >= {low}, got {v!r}")
+        if self.n_timesteps is None and self.iterations is None:
+            raise ValueError("give the run an end: steps (n_timesteps) or iterations")
         if isinstance(self.reward_scale, bool) or not isinstance(self.reward_scale, (int, float)) \
                 or not math.isfinite(self.reward_scale) or self.reward_scale <= 0:
             raise ValueError(f"reward_scale must be a finite number > 0, got {self.reward_scale!r}")
@@ -182,10 +181,12 @@ def load_rllib_hyperparams(scenario: str, config_file: str | Path | None = None)
     return params
 
 
-def env_config_dict(cfg: RLlibTrainConfig) -> dict:
-    """The ``env_config`` RLlib hands to ``FormationMultiAgentEnv`` on every env runner."""
+def env_config_dict(cfg: RLlibTrainConfig, episode_stream: int = 0) -> dict:
+    """The ``env_config`` RLlib hands to ``FormationMultiAgentEnv`` on every env runner
+    (``episode_stream``: 0, or the iteration a resumed run restarts from, so it sees new episodes)."""
     return {"scenario": cfg.scenario, "action_mode": cfg.action_mode, "learning": cfg.learning,
-            "env_kwargs": copy.deepcopy(cfg.env_kwargs), "reward_scale": cfg.reward_scale}
+            "env_kwargs": copy.deepcopy(cfg.env_kwargs), "reward_scale": cfg.reward_scale,
+            "episode_stream": int(episode_stream)}
 
 
 def checkpoint_metadata(cfg: RLlibTrainConfig, *, iteration: int, env_steps: int) -> dict:
@@ -209,6 +210,10 @@ def parse_address(address: str | None):
     address = address.strip()
     if address == "auto":
         return "auto"
+    if "://" in address:
+        raise ValueError(f"--address {address!r}: give the head's GCS address HOST:PORT (e.g. 10.0.0.5:6379) or "
+                         "'auto' on a cluster node; Ray Client (ray://) and dashboard (http://) addresses are not "
+                         "supported")
     host, sep, port = address.rpartition(":")
     host = host.strip("[]")
     if not sep or not host or not port.isdigit() or not 0 < int(port) < 65536:
@@ -241,6 +246,8 @@ def check_reachable(host: str, port: int, timeout_s: float = 5.0) -> None:
             f"cannot reach a Ray cluster at {host}:{port} ({reason}). Start its head node with "
             f"`ray start --head --port={port}`, check that this machine can reach that port, or leave out "
             f"--address to train on a local Ray instance") from exc
+    if os.environ.get("RAY_USE_TLS", "0").lower() in ("1", "true"):
+        return  # a TLS cluster answers the plaintext preface with a TLS alert; the TCP check is what we can do
     if len(head) < 9 or head[3] != 0x04:
         raise ClusterUnreachableError(
             f"{host}:{port} accepts connections but is not a Ray head's GCS port (it does not speak gRPC; "
@@ -300,10 +307,13 @@ def connect(address: str | None = None, *, num_cpus: int | None = None, log: Cal
         raise ValueError("--num-cpus applies only to a local Ray instance (without --address); a cluster has "
                          "the CPUs its nodes were started with")
     if target is None:
-        # A private instance: loopback only, no dashboard (nothing listens beyond this machine).
-        ray.init(num_cpus=num_cpus, include_dashboard=False, _node_ip_address="127.0.0.1",
+        # A private instance: address="local" so that a RAY_ADDRESS in the environment is not joined
+        # instead; the node is addressed as 127.0.0.1 and there is no dashboard. (Ray's own servers
+        # listen on every interface whatever the node address; its token authentication guards them.)
+        ray.init(address="local", num_cpus=num_cpus, include_dashboard=False, _node_ip_address="127.0.0.1",
                  logging_level="ERROR", configure_logging=True)
-        log(f"started a local Ray instance ({int(ray.cluster_resources().get('CPU', 0))} CPUs, 127.0.0.1)")
+        node = ray.nodes()[0].get("NodeManagerAddress", "?")
+        log(f"started a local Ray instance ({int(ray.cluster_resources().get('CPU', 0))} CPUs, node address {node})")
         return True
     if target == "auto":
         _join("auto", "auto")
@@ -317,7 +327,7 @@ def connect(address: str | None = None, *, num_cpus: int | None = None, log: Cal
 
 
 # ------------------------------------------------------------------------------------------ algorithm
-def build_algo_config(cfg: RLlibTrainConfig):
+def build_algo_config(cfg: RLlibTrainConfig, episode_stream: int = 0):
     """The PPOConfig of a run: the PettingZoo env through RLlib, shared or per-role policies."""
     from ray.rllib.algorithms.ppo import PPOConfig
     from ray.rllib.core.rl_module.default_model_config import DefaultModelConfig
@@ -329,7 +339,7 @@ def build_algo_config(cfg: RLlibTrainConfig):
     mapping = shared_policy if cfg.policies == "shared" else role_policy
     return (
         PPOConfig()
-        .environment(FormationMultiAgentEnv, env_config=env_config_dict(cfg))
+        .environment(FormationMultiAgentEnv, env_config=env_config_dict(cfg, episode_stream))
         .env_runners(num_env_runners=cfg.num_env_runners, num_envs_per_env_runner=cfg.num_envs_per_env_runner,
                      num_cpus_per_env_runner=cfg.num_cpus_per_env_runner, rollout_fragment_length="auto")
         .multi_agent(policies=set(cfg.modules), policy_mapping_fn=mapping)
@@ -367,7 +377,7 @@ def _save_checkpoint(algo, cfg: RLlibTrainConfig, run_dir: Path, env_steps: int)
         raise FileExistsError(f"checkpoint {str(final)!r} exists already; not overwriting it")
     tmp = Path(tempfile.mkdtemp(prefix=f".{final.name}.", dir=ckdir))
     try:
-        algo.save_to_path(str(tmp))
+        algo.save_to_path(str(tmp.resolve()))  # RLlib takes a path without a scheme for a URI unless absolute
         meta = checkpoint_metadata(cfg, iteration=algo.iteration, env_steps=env_steps)
         (tmp / CHECKPOINT_META).write_text(json.dumps(meta, indent=2) + "\n")
         os.chmod(tmp, 0o755)
@@ -433,39 +443,23 @@ def train_rllib(*, scenario: str | None = None, action_mode: str | None = None, 
                 resume: bool = False, overrides: dict | None = None, log: Callable[[str], None] | None = None,
                 command: str | None = None) -> dict:
     """Train (or resume) one RLlib run; returns its summary. ``overrides``: hyperparameters merged
-    last (the YAML format; the tests use it for tiny runs). On ``resume`` the run's own configuration
-    is used; ``steps``/``iterations`` extend it and ``num_env_runners`` may change."""
-    import yaml
+    last (the YAML format; the tests use it for tiny runs).
 
-    from formation_env.io import atomic_write_text, prepare_output_dir
+    On ``resume`` the run's own configuration is used. A new ``steps`` and/or ``iterations`` replaces
+    the run's end (whichever of the two is given; both when both are), ``num_env_runners`` and
+    ``num_envs_per_env_runner`` may change, and the env runners draw new episodes (their seeds are
+    mixed with the restored iteration). Everything that can be checked is checked before Ray starts,
+    and the run directory is created only once the Algorithm is built."""
+    import yaml
 
     log = log or (lambda msg: print(msg, flush=True))
     parse_address(address)  # a malformed address fails before anything starts
     require_rllib()
     if resume:
-        if out_dir is None:
-            raise ValueError("--resume needs --out RUN_DIR (the run to continue)")
-        run_dir = Path(out_dir)
-        if not (run_dir / "config.yaml").is_file():
-            raise ValueError(f"cannot resume: {str(run_dir)!r} holds no config.yaml (not a training run directory)")
-        saved = yaml.safe_load((run_dir / "config.yaml").read_text())
-        if saved.get("backend") != "rllib":
-            raise ValueError(f"cannot resume {str(run_dir)!r} with --backend rllib: it is not an RLlib run")
-        data = saved["config"]
-        for name, given in (("scenario", scenario), ("action_mode", action_mode), ("policies", policies),
-                            ("learning", learning), ("seed", seed)):
-            if given is not None and given != data.get(name):
-                raise ValueError(f"--resume: {name} {given!r} differs from the run's {data.get(name)!r}")
-        for name, given in (("n_timesteps", steps), ("iterations", iterations), ("num_env_runners", num_env_runners),
-                            ("num_envs_per_env_runner", num_envs_per_env_runner)):
-            if given is not None:
-                data[name] = given
-        if steps is not None and iterations is None:
-            data["iterations"] = None  # a new --steps alone sets the end; the old iteration cap would stop it at once
-        cfg = RLlibTrainConfig(**data)
-        ck = latest_rllib_checkpoint(run_dir)
-        if ck is None:
-            raise ValueError(f"cannot resume: no checkpoint in {str(run_dir / 'checkpoints')!r}")
+        cfg, run_dir, ck = _resume_config(out_dir, config_file, overwrite, dict(
+            scenario=scenario, action_mode=action_mode, policies=policies, learning=learning, seed=seed),
+            dict(n_timesteps=steps, iterations=iterations, num_env_runners=num_env_runners,
+                 num_envs_per_env_runner=num_envs_per_env_runner))
     else:
         if scenario is None:
             raise ValueError("give --scenario")
@@ -478,17 +472,22 @@ def train_rllib(*, scenario: str | None = None, action_mode: str | None = None, 
             num_envs_per_env_runner=num_envs_per_env_runner)
         run_dir = Path(out_dir) if out_dir is not None else Path("runs") / (
             f"{cfg.scenario}-rllib-ppo-{cfg.policies}-seed{cfg.seed}-{time.strftime('%Y%m%d-%H%M%S')}")
-        if run_dir.exists() and not overwrite and (not run_dir.is_dir() or any(run_dir.iterdir())):
-            prepare_output_dir(run_dir, overwrite=False)  # raises its clear error before Ray starts
+        _check_new_run_dir(run_dir, overwrite)
         ck = None
 
     started = connect(address, num_cpus=num_cpus, log=log)
     try:
-        if ck is None:  # created only once Ray is up, so a failed connection leaves nothing behind
-            run_dir = prepare_output_dir(run_dir, overwrite=overwrite)
-            atomic_write_text(run_dir / "config.yaml", yaml.safe_dump(
-                {"backend": "rllib", "command": command, "config": cfg.to_dict()}, sort_keys=False), overwrite=True)
-        return _train_loop(cfg, run_dir, ck, log)
+        algo = build_algo_config(cfg, episode_stream=ck[1] if ck else 0).build_algo()
+        try:
+            if ck is None:
+                _prepare_new_run_dir(run_dir, overwrite)
+                from formation_env.io import atomic_write_text
+
+                atomic_write_text(run_dir / "config.yaml", yaml.safe_dump(
+                    {"backend": "rllib", "command": command, "config": cfg.to_dict()}, sort_keys=False))
+            return _train_loop(algo, cfg, run_dir, ck, log)
+        finally:
+            algo.stop()
     finally:
         if started:
             import ray
@@ -496,60 +495,122 @@ def train_rllib(*, scenario: str | None = None, action_mode: str | None = None, 
             ray.shutdown()
 
 
+_OWN_FILES = ("progress.csv", "summary.json", "config.yaml")
+
+
+def _check_new_run_dir(run_dir: Path, overwrite: bool) -> None:
+    from formation_env.io import prepare_output_dir
+
+    if run_dir.exists() and not overwrite and (not run_dir.is_dir() or any(run_dir.iterdir())):
+        prepare_output_dir(run_dir, overwrite=False)  # raises its clear error, before Ray starts
+    if run_dir.exists() and not run_dir.is_dir():
+        raise FileExistsError(f"output path {str(run_dir)!r} exists and is not a directory")
+
+
+def _prepare_new_run_dir(run_dir: Path, overwrite: bool) -> None:
+    """Create the run directory; with ``overwrite``, first remove what an earlier run of this backend
+    left there (its checkpoints would otherwise be taken for this run's by resume and evaluate)."""
+    import shutil
+
+    from formation_env.io import prepare_output_dir
+
+    if overwrite and run_dir.is_dir():
+        ckdir = run_dir / "checkpoints"
+        if ckdir.is_dir():
+            for p in ckdir.iterdir():
+                if p.is_dir() and (_CKPT.match(p.name) or p.name.startswith(".iter_")):
+                    shutil.rmtree(p)
+        for p in list(run_dir.glob("summary-resume-*.json")) + [run_dir / f for f in _OWN_FILES]:
+            if p.is_file():
+                p.unlink()
+    prepare_output_dir(run_dir, overwrite=overwrite)
+
+
+def _resume_config(out_dir, config_file, overwrite: bool, fixed: dict, changeable: dict):
+    """The configuration, directory and checkpoint of a run to resume, checked before Ray starts."""
+    import yaml
+
+    if out_dir is None:
+        raise ValueError("--resume needs --out RUN_DIR (the run to continue)")
+    if config_file is not None:
+        raise ValueError("--resume continues the run's own configuration; --config applies to new runs only")
+    if overwrite:
+        raise ValueError("--resume and --overwrite exclude each other")
+    run_dir = Path(out_dir)
+    if not (run_dir / "config.yaml").is_file():
+        raise ValueError(f"cannot resume: {str(run_dir)!r} holds no config.yaml (not a training run directory)")
+    saved = yaml.safe_load((run_dir / "config.yaml").read_text()) or {}
+    if saved.get("backend") != "rllib":
+        raise ValueError(f"cannot resume {str(run_dir)!r} with --backend rllib: it is an SB3 run (leave out --backend)")
+    data = dict(saved["config"])
+    for name, given in fixed.items():
+        if given is not None and given != data.get(name):
+            raise ValueError(f"--resume: {name} {given!r} differs from the run's {data.get(name)!r}")
+    if changeable["n_timesteps"] is not None or changeable["iterations"] is not None:
+        data["n_timesteps"], data["iterations"] = changeable["n_timesteps"], changeable["iterations"]
+    for name in ("num_env_runners", "num_envs_per_env_runner"):
+        if changeable[name] is not None:
+            data[name] = changeable[name]
+    cfg = RLlibTrainConfig(**data)
+    ck = latest_rllib_checkpoint(run_dir)
+    if ck is None:
+        raise ValueError(f"cannot resume: no checkpoint in {str(run_dir / 'checkpoints')!r}")
+    meta = json.loads((ck[0] / CHECKPOINT_META).read_text())
+    if _done(cfg, ck[1], int(meta["env_steps"])):
+        raise ValueError(f"the run is already at iteration {ck[1]} / {meta['env_steps']} env steps; give a larger "
+                         "--iterations or --steps to continue it")
+    return cfg, run_dir, ck
+
+
 def _done(cfg: RLlibTrainConfig, iteration: int, env_steps: int) -> bool:
-    return env_steps >= cfg.n_timesteps or (cfg.iterations is not None and iteration >= cfg.iterations)
+    return ((cfg.n_timesteps is not None and env_steps >= cfg.n_timesteps)
+            or (cfg.iterations is not None and iteration >= cfg.iterations))
 
 
-def _train_loop(cfg: RLlibTrainConfig, run_dir: Path, ck, log) -> dict:
+def _train_loop(algo, cfg: RLlibTrainConfig, run_dir: Path, ck, log) -> dict:
     from formation_env.io import atomic_write_json
 
-    algo = build_algo_config(cfg).build_algo()
-    try:
-        rows: list[dict] = []
-        start_iter, env_steps = 0, 0
-        if ck is not None:
-            path, it = ck
-            algo.restore_from_path(str(path))
-            meta = json.loads((path / CHECKPOINT_META).read_text())
-            start_iter, env_steps = algo.iteration, int(meta["env_steps"])
-            if start_iter != it:
-                raise RuntimeError(f"restored iteration {start_iter} differs from the checkpoint's name {path.name}")
-            if _done(cfg, start_iter, env_steps):
-                raise ValueError(f"the run is already at iteration {start_iter} / {env_steps} env steps; give a larger "
-                                 "--iterations or --steps to continue it")
-            rows = _read_progress(run_dir, start_iter)
-            log(f"resuming {run_dir} from {path.name} ({env_steps} env steps)")
-        log(f"training RLlib PPO ({cfg.policies} policies: {', '.join(cfg.modules)}) on {cfg.scenario} "
-            f"({cfg.action_mode} actions, {cfg.learning} learn), seed {cfg.seed}, {cfg.num_env_runners} env runner(s) "
-            f"-> {run_dir}")
-        t0 = time.perf_counter()
-        last_ck = ck[0] if ck else None
-        while not _done(cfg, algo.iteration, env_steps):
-            result = algo.train()
-            row = _progress_row(result, cfg.reward_scale)
-            env_steps = row["env_steps_lifetime"]
-            rows.append(row)
-            _write_progress(run_dir, rows)
-            log(f"iter {row['iteration']:4d}  env steps {env_steps:9d}  return/agent {row['episode_return_mean'] or '-':>10}"
-                f"  {row['env_steps_per_s'] or '-'} env steps/s")
-            if cfg.checkpoint_every and algo.iteration % cfg.checkpoint_every == 0:
-                last_ck = _save_checkpoint(algo, cfg, run_dir, env_steps)
-        if last_ck is None or last_ck.name != f"iter_{algo.iteration:06d}":
+    rows: list[dict] = []
+    start_iter, env_steps = 0, 0
+    if ck is not None:
+        path, it = ck
+        algo.restore_from_path(str(path.resolve()))
+        meta = json.loads((path / CHECKPOINT_META).read_text())
+        start_iter, env_steps = algo.iteration, int(meta["env_steps"])
+        if start_iter != it:
+            raise RuntimeError(f"restored iteration {start_iter} differs from the checkpoint's name {path.name}")
+        rows = _read_progress(run_dir, start_iter)  # rows after the checkpoint (a crash between two) are dropped
+        log(f"resuming {run_dir} from {path.name} ({env_steps} env steps)")
+    log(f"training RLlib PPO ({cfg.policies} policies: {', '.join(cfg.modules)}) on {cfg.scenario} "
+        f"({cfg.action_mode} actions, {cfg.learning} learn), seed {cfg.seed}, {cfg.num_env_runners} env runner(s) "
+        f"-> {run_dir}")
+    t0 = time.perf_counter()
+    last_ck = ck[0] if ck else None
+    while not _done(cfg, algo.iteration, env_steps):
+        result = algo.train()
+        row = _progress_row(result, cfg.reward_scale)
+        env_steps = row["env_steps_lifetime"]
+        rows.append(row)
+        _write_progress(run_dir, rows)
+        log(f"iter {row['iteration']:4d}  env steps {env_steps:9d}  return/agent {row['episode_return_mean'] or '-':>10}"
+            f"  {row['env_steps_per_s'] or '-'} env steps/s")
+        if cfg.checkpoint_every and algo.iteration % cfg.checkpoint_every == 0:
             last_ck = _save_checkpoint(algo, cfg, run_dir, env_steps)
-        wall = time.perf_counter() - t0
-        new = rows[len(rows) - (algo.iteration - start_iter):] if algo.iteration > start_iter else []
-        sampled = sum(int(r["env_steps"]) for r in new)
-        summary = {"run_dir": str(run_dir), "backend": "rllib", "scenario": cfg.scenario, "policies": cfg.policies,
-                   "modules": cfg.modules, "seed": cfg.seed, "iterations": algo.iteration, "env_steps": env_steps,
-                   "resumed_from_iteration": start_iter or None, "num_env_runners": cfg.num_env_runners,
-                   "wall_s": round(wall, 1), "env_steps_per_s": round(sampled / wall, 1) if wall > 0 else None,
-                   "checkpoint": str(last_ck)}
-        name = "summary.json" if not start_iter else f"summary-resume-{start_iter}.json"
-        atomic_write_json(run_dir / name, summary, overwrite=True)
-        log(f"done in {wall:.0f} s: iteration {algo.iteration}, {env_steps} env steps -> {last_ck}")
-        return summary
-    finally:
-        algo.stop()
+    if last_ck is None or last_ck.name != f"iter_{algo.iteration:06d}":
+        last_ck = _save_checkpoint(algo, cfg, run_dir, env_steps)
+    wall = time.perf_counter() - t0
+    new = rows[len(rows) - (algo.iteration - start_iter):] if algo.iteration > start_iter else []
+    sampled = sum(int(r["env_steps"]) for r in new)
+    summary = {"run_dir": str(run_dir), "backend": "rllib", "scenario": cfg.scenario, "policies": cfg.policies,
+               "modules": cfg.modules, "seed": cfg.seed, "iterations": algo.iteration, "env_steps": env_steps,
+               "resumed_from_iteration": start_iter or None, "num_env_runners": cfg.num_env_runners,
+               "num_envs_per_env_runner": cfg.num_envs_per_env_runner,
+               "wall_s": round(wall, 1), "env_steps_per_s": round(sampled / wall, 1) if wall > 0 else None,
+               "checkpoint": str(last_ck)}
+    name = "summary.json" if not start_iter else f"summary-resume-{start_iter}.json"
+    atomic_write_json(run_dir / name, summary, overwrite=True)
+    log(f"done in {wall:.0f} s: iteration {algo.iteration}, {env_steps} env steps -> {last_ck}")
+    return summary
 
 
 # ------------------------------------------------------------------------------------------ inference
@@ -575,17 +636,22 @@ def load_rllib_policy(spec: str | Path, *, name: str | None = None, module_id: s
     module_id = module_id or ("follower" if "follower" in modules else "shared")
     if module_id not in modules:
         raise ValueError(f"checkpoint {str(path)!r} has no module {module_id!r}; it has {modules}")
-    module = RLModule.from_checkpoint(str(path / "learner_group" / "learner" / "rl_module" / module_id))
+    module = RLModule.from_checkpoint(str((path / "learner_group" / "learner" / "rl_module" / module_id).resolve()))
     dist_cls = module.get_inference_action_dist_cls()
+    obs_size = int(np.prod(module.observation_space.shape))
 
     def act(obs: np.ndarray) -> np.ndarray:
+        obs = np.asarray(obs)
+        if obs.ndim != 2 or obs.shape[1] != obs_size:
+            raise ValueError(f"RLlib policy {str(path)!r} (trained on {meta['scenario']!r}) takes observations of "
+                             f"size {obs_size}; got shape {obs.shape} (a scenario with another number of UAVs?)")
         x = torch.from_numpy(np.ascontiguousarray(obs, dtype=np.float32))
         with torch.no_grad():
             out = module.forward_inference({"obs": x})
             a = dist_cls.from_logits(out["action_dist_inputs"]).to_deterministic().sample()
         return np.clip(a.numpy(), -1.0, 1.0)
 
-    label = name or f"rllib-{Path(meta.get('run_dir') or path.parent.parent).name}-{path.name}"
+    label = name or f"rllib-{path.resolve().parent.parent.name}-{path.name}"
     return EvalPolicy(label, meta["action_mode"], act, float(meta.get("control_hz", 10.0)), str(path))
 
 

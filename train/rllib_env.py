@@ -9,20 +9,20 @@ from __future__ import annotations
 
 from types import SimpleNamespace
 
+import numpy as np
+
 from ray.rllib.env.wrappers.pettingzoo_env import ParallelPettingZooEnv
 
 from formation_env.envs.parallel import FormationParallelEnv
 
 from .config import make_env_config
 
-__all__ = ["FormationMultiAgentEnv", "shared_policy", "role_policy", "role_of", "LEADER_AGENT", "ROLES",
-           "build_env_config"]
+__all__ = ["FormationMultiAgentEnv", "shared_policy", "role_policy", "role_of", "LEADER_AGENT", "build_env_config"]
 
 # Vehicle 0 flies the scenario's reference path in every scenario; every other vehicle holds a slot
 # relative to it. That is what "leader" and "follower" mean for the per-role policies, also in
 # reconfiguration, where the follower moves ahead of vehicle 0 in space but still flies a slot.
 LEADER_AGENT = "uav_0"
-ROLES = ("leader", "follower")
 
 
 def role_of(agent_id: str) -> str:
@@ -50,20 +50,30 @@ def build_env_config(env_config: dict):
 class FormationMultiAgentEnv(ParallelPettingZooEnv):
     """``ParallelPettingZooEnv(FormationParallelEnv(...))`` built from an RLlib ``env_config`` dict.
 
-    Two things differ from the plain wrapper: the agent order is the env's own (the wrapper builds it
-    from a set, whose order depends on the process's string hashing, so runs would not replay), and
-    the learner's rewards are multiplied by ``env_config["reward_scale"]`` (1 by default; the run's
-    progress log divides it back out).
+    Three things differ from the plain wrapper:
+
+    * the agent order is the env's own (the wrapper builds it from a set, whose order depends on the
+      process's string hashing, so runs would not replay);
+    * the learner's rewards are multiplied by ``env_config["reward_scale"]`` (1 by default; the run's
+      progress log divides it back out);
+    * a seeded reset mixes the seed with the env runner's index and the run's episode stream (0, or
+      the iteration a resumed run restarted from). RLlib seeds runner ``i``'s sub-env ``j`` with
+      ``seed + i + j``, so without the runner index two runners' sub-envs would share whole episode
+      streams, and a resumed run would replay the episodes its first iterations saw.
     """
 
     def __init__(self, env_config: dict | None = None) -> None:
+        self.worker_index = int(getattr(env_config, "worker_index", 0) or 0)
         env_config = dict(env_config or {})
         self.reward_scale = float(env_config.get("reward_scale", 1.0))
+        self.episode_stream = int(env_config.get("episode_stream", 0))
         super().__init__(FormationParallelEnv(build_env_config(env_config)))
         self.agents = list(self.par_env.possible_agents)
         self.possible_agents = list(self.par_env.possible_agents)
 
     def reset(self, *, seed=None, options=None):
+        if seed is not None:
+            seed = int(np.random.SeedSequence([int(seed), self.worker_index, self.episode_stream]).generate_state(1)[0])
         obs, infos = super().reset(seed=seed, options=options)
         self.agents = list(self.par_env.agents)
         return obs, infos

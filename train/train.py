@@ -302,6 +302,8 @@ def train(*, scenario: str | None = None, algo: str | None = None, action_mode: 
         if not (run_dir / "config.yaml").is_file():
             raise ValueError(f"cannot resume: {str(run_dir)!r} holds no config.yaml (not a training run directory)")
         saved = yaml.safe_load((run_dir / "config.yaml").read_text())
+        if saved.get("backend") == "rllib":
+            raise ValueError(f"{str(run_dir)!r} is an RLlib run: resume it with --backend rllib")
         cfg = TrainConfig.from_dict(saved["config"])
         for name, given in (("scenario", scenario), ("algo", algo)):
             if given is not None and given != getattr(cfg, name):

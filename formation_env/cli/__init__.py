@@ -12,7 +12,7 @@ import argparse
 import importlib
 import sys
 
-from ..errors import MissingDependencyError
+from ..errors import ClusterUnreachableError, MissingDependencyError
 
 COMMANDS = ("verify", "bench", "demo", "trim", "modes", "run", "report", "replay", "train", "evaluate")
 
@@ -39,7 +39,7 @@ def main(argv: list[str] | None = None) -> int:
     args = parser.parse_args(argv)
     try:
         return int(args.func(args) or 0)
-    except (ValueError, FileExistsError, MissingDependencyError, ConnectionError) as exc:
+    except (ValueError, FileExistsError, MissingDependencyError, ClusterUnreachableError) as exc:
         print(f"formation-env {args.command}: error: {exc}", file=sys.stderr)
         return 2
 

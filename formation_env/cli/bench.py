@@ -17,10 +17,10 @@ def register(sub) -> None:
     p.add_argument("--quick", action="store_true", help="fewer repeats (for smoke tests)")
     p.add_argument("--rllib", action="store_true",
                    help="instead: RLlib env steps/s sampled with 1 and 2 env runners (needs the 'distributed' extra)")
-    p.add_argument("--runners", type=int, nargs="+", default=[1, 2], help="env runner counts for --rllib (default 1 2)")
-    p.add_argument("--action-mode", default="residual", choices=("surfaces", "residual", "setpoints"),
+    p.add_argument("--runners", type=int, nargs="+", default=None, help="env runner counts for --rllib (default 1 2)")
+    p.add_argument("--action-mode", default=None, choices=("surfaces", "residual", "setpoints"),
                    help="action mode for --rllib (default residual)")
-    p.add_argument("--envs-per-runner", type=int, default=1, help="envs per env runner for --rllib (default 1)")
+    p.add_argument("--envs-per-runner", type=int, default=None, help="envs per env runner for --rllib (default 1)")
     p.add_argument("--address", default=None, help="Ray cluster for --rllib (default: a local instance)")
     p.set_defaults(func=run)
 
@@ -28,6 +28,10 @@ def register(sub) -> None:
 def run(args) -> int:
     if args.rllib:
         return _run_rllib(args)
+    given = [f for f, v in (("--runners", args.runners), ("--action-mode", args.action_mode),
+                            ("--envs-per-runner", args.envs_per_runner), ("--address", args.address)) if v is not None]
+    if given:
+        raise ValueError(f"{', '.join(given)}: only with --rllib")
     results = {"machine": {"cpus": os.cpu_count(), "python": platform.python_version(), "platform": platform.platform()}}
     for name, module in import_available(BENCH_MODULES).items():
         results[name.split(".")[1]] = module.run_benchmarks(quick=args.quick)
@@ -59,12 +63,14 @@ def _print_human(results: dict) -> None:
 def _run_rllib(args) -> int:
     from train.rllib_backend import benchmark_sampling
 
-    if any(n < 0 for n in args.runners):
-        raise ValueError(f"--runners must be integers >= 0, got {args.runners}")
-    if args.envs_per_runner < 1:
-        raise ValueError(f"--envs-per-runner must be >= 1, got {args.envs_per_runner}")
-    res = benchmark_sampling(tuple(args.runners), action_mode=args.action_mode, address=args.address,
-                             num_envs_per_env_runner=args.envs_per_runner,
+    runners = args.runners or [1, 2]
+    envs = 1 if args.envs_per_runner is None else args.envs_per_runner
+    if any(n < 0 for n in runners):
+        raise ValueError(f"--runners must be integers >= 0, got {runners}")
+    if envs < 1:
+        raise ValueError(f"--envs-per-runner must be >= 1, got {envs}")
+    res = benchmark_sampling(tuple(runners), action_mode=args.action_mode or "residual", address=args.address,
+                             num_envs_per_env_runner=envs,
                              rounds=2 if args.quick else 5, batch=1000 if args.quick else 2000,
                              log=(lambda m: None) if args.json else print)
     if args.json:

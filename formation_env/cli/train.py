@@ -98,12 +98,16 @@ _RLLIB_ONLY = ("iterations", "num_env_runners", "num_envs_per_env_runner", "poli
 def run(args) -> int:
     if args.resume and args.overwrite:
         raise ValueError("--resume and --overwrite exclude each other")
+    if args.num_cpus is not None and args.address is not None:
+        raise ValueError("--num-cpus applies only to a local Ray instance (without --address)")
     command = "formation-env " + " ".join(shlex.quote(a) for a in sys.argv[1:]) if sys.argv[1:2] == ["train"] else None
     if args.backend == "rllib":
         from train.rllib_backend import train_rllib
 
         if args.algo not in (None, "ppo"):
             raise ValueError(f"--backend rllib trains multi-agent PPO only, got --algo {args.algo}")
+        if args.progress_bar is not None:
+            raise ValueError("--progress-bar/--no-progress-bar: only with --backend sb3 (RLlib logs a line per iteration)")
         train_rllib(scenario=args.scenario, action_mode=args.action_mode, seed=args.seed, steps=args.steps,
                     iterations=args.iterations, policies=args.policies, learning=args.learning,
                     num_env_runners=args.num_env_runners, num_envs_per_env_runner=args.num_envs_per_env_runner,

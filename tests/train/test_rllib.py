@@ -87,12 +87,13 @@ def test_rllib_trains_checkpoints_restores_and_evaluates_on_loopback_ray(tmp_pat
     cfg = tmp_path / "tiny.yml"
     cfg.write_text(yaml.safe_dump(TINY))
     run = tmp_path / "run"
-    base = ["train", "--backend", "rllib", "--scenario", "formation_keeping", "--num-cpus", "2", "--out", str(run)]
+    # A relative --out, as users type it (RLlib itself wants absolute checkpoint paths).
+    base = ["train", "--backend", "rllib", "--scenario", "formation_keeping", "--num-cpus", "2", "--out", "run"]
 
     r = _cli(base + ["--num-env-runners", "2", "--iterations", "2", "--seed", "3", "--config", str(cfg)],
              ray_tmpdir, tmp_path)
     assert r.returncode == 0, r.stdout[-3000:] + r.stderr[-3000:]
-    assert "127.0.0.1" in r.stdout  # the local instance is bound to loopback
+    assert "node address 127.0.0.1" in r.stdout  # read back from ray.nodes()
     _assert_no_ray_left(ray_tmpdir)
     ck2 = run / "checkpoints" / "iter_000002"
     meta = json.loads((ck2 / "formation_env.json").read_text())
@@ -170,36 +171,65 @@ def test_rllib_per_role_policies_train_leader_and_follower(tmp_path, ray_tmpdir,
 
 def test_rllib_same_seed_reproduces_the_run_with_two_env_runners(tmp_path, ray_tmpdir, monkeypatch):
     import ray
+    import yaml as _yaml
 
-    from train.rllib_backend import connect, load_rllib_policy, train_rllib
+    from train.rllib_backend import RLlibTrainConfig, build_algo_config, connect, load_rllib_policy, train_rllib
 
     monkeypatch.setenv("RAY_TMPDIR", ray_tmpdir)
     monkeypatch.delenv("RAY_ADDRESS", raising=False)
-    assert connect(None, num_cpus=2, log=lambda m: None)  # one instance for the three runs
+    quiet = {"log": lambda m: None}
+    obs = np.random.default_rng(1).normal(size=(16, _obs_size(2))).astype(np.float32)
+
+    def returns(run, upto=2):
+        return [r.split(",")[:6] for r in (run / "progress.csv").read_text().splitlines()[1:upto + 1]]
+
+    assert connect(None, num_cpus=2, **quiet)  # one instance for every run below
     try:
         runs = {}
         for name, seed in (("a", 7), ("b", 7), ("c", 8)):
             runs[name] = tmp_path / name
             train_rllib(scenario="formation_keeping", seed=seed, iterations=2, num_env_runners=2, out_dir=runs[name],
-                        overrides=TINY, log=lambda m: None)
+                        overrides=TINY, **quiet)
+        act = {k: load_rllib_policy(v).act(obs) for k, v in runs.items()}
+        assert returns(runs["a"]) == returns(runs["b"]) and np.array_equal(act["a"], act["b"])
+        assert returns(runs["a"]) != returns(runs["c"]) and not np.array_equal(act["a"], act["c"])
+
+        # restore_from_path really puts the checkpoint's weights into the Algorithm.
+        cfg = RLlibTrainConfig(**_yaml.safe_load((runs["a"] / "config.yaml").read_text())["config"])
+        algo = build_algo_config(cfg).build_algo()
+        try:
+            def module_actions():
+                import torch
+
+                m = algo.get_module("shared")
+                with torch.no_grad():
+                    out = m.forward_inference({"obs": torch.from_numpy(obs)})["action_dist_inputs"][:, :4]
+                return np.clip(out.numpy(), -1, 1)
+
+            fresh = module_actions()
+            algo.restore_from_path(str(runs["a"] / "checkpoints" / "iter_000002"))
+            assert algo.iteration == 2
+            assert np.allclose(module_actions(), act["a"], atol=1e-6) and not np.allclose(fresh, act["a"], atol=1e-3)
+        finally:
+            algo.stop()
+
         # A resume given only --steps runs to those steps (the first run's iteration cap no longer applies).
-        s = train_rllib(out_dir=tmp_path / "c", resume=True, steps=600, log=lambda m: None)
+        s = train_rllib(out_dir=runs["c"], resume=True, steps=600, **quiet)
         assert s["iterations"] == 3 and s["env_steps"] == 600 and s["resumed_from_iteration"] == 2
         with pytest.raises(ValueError, match="already at iteration 3"):
-            train_rllib(out_dir=tmp_path / "c", resume=True, steps=600, log=lambda m: None)
+            train_rllib(out_dir=runs["c"], resume=True, steps=600, **quiet)
         with pytest.raises(ValueError, match="seed 9 differs"):
-            train_rllib(out_dir=tmp_path / "c", resume=True, seed=9, steps=800, log=lambda m: None)
+            train_rllib(out_dir=runs["c"], resume=True, seed=9, steps=800, **quiet)
+
+        # --overwrite replaces the earlier run's checkpoints and logs instead of mixing with them.
+        train_rllib(scenario="formation_keeping", seed=7, iterations=1, num_env_runners=2, out_dir=runs["c"],
+                    overwrite=True, overrides=TINY, **quiet)
+        assert sorted(p.name for p in (runs["c"] / "checkpoints").iterdir()) == ["iter_000001"]
+        assert len((runs["c"] / "progress.csv").read_text().splitlines()) == 2
+        assert not list(runs["c"].glob("summary-resume-*.json"))
     finally:
         ray.shutdown()
     _assert_no_ray_left(ray_tmpdir)
-
-    def returns(run):
-        return [r.split(",")[:6] for r in (run / "progress.csv").read_text().splitlines()[1:]]
-
-    obs = np.random.default_rng(1).normal(size=(16, _obs_size(2))).astype(np.float32)
-    act = {k: load_rllib_policy(v).act(obs) for k, v in runs.items()}
-    assert returns(runs["a"]) == returns(runs["b"]) and np.array_equal(act["a"], act["b"])
-    assert returns(runs["a"]) != returns(runs["c"]) and not np.array_equal(act["a"], act["c"])
 
 
 def _obs_size(n_vehicles: int) -> int:
@@ -226,6 +256,26 @@ def test_rllib_env_wrapper_keeps_agent_order_and_scales_rewards():
     assert term["__all__"] is False and trunc["__all__"] is False
     assert [role_policy(a) for a in env.possible_agents] == ["leader", "follower", "follower"]
     assert {shared_policy(a) for a in env.possible_agents} == {"shared"}
+
+
+def test_rllib_env_runners_and_resumes_draw_distinct_episodes():
+    # RLlib seeds runner i's sub-env j with seed + i + j: runner 1 / sub-env 1 and runner 2 / sub-env 0
+    # get the same number, and a resumed run reseeds its runners. Their episodes must still differ.
+    from ray.rllib.env.env_context import EnvContext
+
+    from train.rllib_env import FormationMultiAgentEnv
+
+    cfg = {"scenario": "formation_keeping", "action_mode": "residual", "learning": "followers",
+           "env_kwargs": {"randomisation": {"initial_offset_m": 2.0}}}
+
+    def first_obs(worker, seed, stream=0):
+        env = FormationMultiAgentEnv(EnvContext(dict(cfg, episode_stream=stream), worker_index=worker))
+        return env.reset(seed=seed)[0]["uav_1"]
+
+    base = first_obs(1, 100 + 1 + 1)
+    assert np.array_equal(base, first_obs(1, 102))                 # reproducible
+    assert not np.array_equal(base, first_obs(2, 100 + 2 + 0))     # another runner, same RLlib seed
+    assert not np.array_equal(base, first_obs(1, 102, stream=40))  # the same runner after a resume
 
 
 def test_address_parsing_and_unreachable_cluster_errors(capsys, tmp_path, monkeypatch):
@@ -284,6 +334,29 @@ def test_nothing_outside_the_backend_imports_ray():
     assert r.stdout.strip() == "False"
 
 
+def test_cli_backend_options_do_not_mix(capsys, tmp_path):
+    for argv, msg in (
+            (["train", "--scenario", "formation_keeping", "--algo", "ppo", "--num-env-runners", "2"],
+             "--num-env-runners: only with --backend rllib"),
+            (["train", "--backend", "rllib", "--scenario", "formation_keeping", "--algo", "sac"], "PPO only"),
+            (["train", "--backend", "rllib", "--scenario", "formation_keeping", "--no-progress-bar"],
+             "only with --backend sb3"),
+            (["train", "--backend", "rllib", "--scenario", "formation_keeping", "--address", "ray://h:10001"],
+             "not supported"),
+            (["train", "--backend", "rllib", "--scenario", "formation_keeping", "--address", "auto", "--num-cpus", "2"],
+             "local Ray instance"),
+            (["bench", "--runners", "2"], "only with --rllib")):
+        assert main(argv) == 2, argv
+        assert msg in capsys.readouterr().err, argv
+    run = tmp_path / "run"
+    run.mkdir()
+    (run / "config.yaml").write_text(yaml.safe_dump({"backend": "rllib", "config": {"scenario": "formation_keeping"}}))
+    assert main(["train", "--out", str(run), "--resume"]) == 2
+    assert "resume it with --backend rllib" in capsys.readouterr().err
+    assert main(["train", "--backend", "rllib", "--out", str(run), "--resume", "--config", "x.yml"]) == 2
+    assert "--config applies to new runs only" in capsys.readouterr().err
+
+
 def test_rllib_config_rejects_bad_values():
     from train.rllib_backend import RLlibTrainConfig
 
@@ -297,5 +370,7 @@ def test_rllib_config_rejects_bad_values():
         RLlibTrainConfig(scenario="tracking")
     with pytest.raises(ValueError, match="unknown scenario"):
         RLlibTrainConfig(scenario="airshow")
+    with pytest.raises(ValueError, match="give the run an end"):
+        RLlibTrainConfig(scenario="formation_keeping", n_timesteps=None, iterations=None)
     assert RLlibTrainConfig(scenario="echelon", learning="all", policies="per-role").modules == ["leader", "follower"]
     assert RLlibTrainConfig(scenario="echelon", policies="per-role").modules == ["follower"]
