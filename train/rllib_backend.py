@@ -12,8 +12,8 @@ checkpoints) costs nothing; nothing else in the project imports ray.
 
 Where Ray runs (``address``):
 
-* ``None`` / ``"local"``: a private Ray instance on this machine (node address 127.0.0.1, no dashboard,
-  token authentication on, as Ray does by default), stopped at the end;
+* ``None`` / ``"local"``: a private Ray instance on this machine (no dashboard; token authentication
+  on, as Ray does by default), stopped at the end;
 * ``"auto"``: the Ray cluster this machine belongs to (``ray start`` was run here, or RAY_ADDRESS);
 * ``"HOST:PORT"``: the head node of an existing cluster (its GCS port, 6379 by default).
 
@@ -308,10 +308,11 @@ def connect(address: str | None = None, *, num_cpus: int | None = None, log: Cal
                          "the CPUs its nodes were started with")
     if target is None:
         # A private instance: address="local" so that a RAY_ADDRESS in the environment is not joined
-        # instead; the node is addressed as 127.0.0.1 and there is no dashboard. (Ray's own servers
-        # listen on every interface whatever the node address; its token authentication guards them.)
-        ray.init(address="local", num_cpus=num_cpus, include_dashboard=False, _node_ip_address="127.0.0.1",
-                 logging_level="ERROR", configure_logging=True)
+        # instead, and no dashboard. Ray addresses the node by this machine's IP (it turns a requested
+        # 127.0.0.1 into that) and its servers listen on every interface; its token authentication, on
+        # by default, guards them.
+        ray.init(address="local", num_cpus=num_cpus, include_dashboard=False, logging_level="ERROR",
+                 configure_logging=True)
         node = ray.nodes()[0].get("NodeManagerAddress", "?")
         log(f"started a local Ray instance ({int(ray.cluster_resources().get('CPU', 0))} CPUs, node address {node})")
         return True
@@ -681,7 +682,7 @@ def benchmark_sampling(runner_counts=(1, 2), *, scenario: str = "formation_keepi
             cfg = RLlibTrainConfig(scenario=scenario, action_mode=action_mode, num_env_runners=n, checkpoint_every=0,
                                    num_envs_per_env_runner=num_envs_per_env_runner,
                                    env_kwargs=load_rllib_hyperparams(scenario).get("env_kwargs", {}),
-                                   training={"train_batch_size_per_learner": batch, "minibatch_size": 500,
+                                   training={"train_batch_size_per_learner": batch, "minibatch_size": min(500, batch),
                                              "num_epochs": 1},
                                    model={"fcnet_hiddens": [64, 64]})
             algo = build_algo_config(cfg).build_algo()
