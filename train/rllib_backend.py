@@ -652,7 +652,8 @@ def load_rllib_policy(spec: str | Path, *, name: str | None = None, module_id: s
             a = dist_cls.from_logits(out["action_dist_inputs"]).to_deterministic().sample()
         return np.clip(a.numpy(), -1.0, 1.0)
 
-    label = name or f"rllib-{path.resolve().parent.parent.name}-{path.name}"
+    run_name = path.resolve().parent.parent.name
+    label = name or f"{'' if 'rllib' in run_name else 'rllib-'}{run_name}-{path.name}"
     return EvalPolicy(label, meta["action_mode"], act, float(meta.get("control_hz", 10.0)), str(path))
 
 
