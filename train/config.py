@@ -29,7 +29,7 @@ import math
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 
-__all__ = ["ALGOS", "ACTION_MODES", "TrainConfig", "load_hyperparams", "load_yaml", "make_env_config",
+__all__ = ["ALGOS", "ACTION_MODES", "TrainConfig", "load_hyperparams", "load_yaml", "make_env_config", "env_config_for",
            "VALIDATION_SEED_BASE", "TEST_SEED_BASE"]
 
 ALGOS = ("ppo", "sac", "td3")
@@ -194,9 +194,15 @@ class TrainConfig:
 
 def make_env_config(cfg: TrainConfig, **overrides):
     """The EnvConfig a run trains on (followers learn; flat observations)."""
+    return env_config_for(cfg.scenario, cfg.action_mode, cfg.env_kwargs, **overrides)
+
+
+def env_config_for(scenario: str, action_mode: str, env_kwargs: dict, **overrides):
+    """The EnvConfig of a scenario, action mode and ``env_kwargs`` mapping (the hyperparameter files'
+    format; ``learning`` defaults to followers; flat observations). Shared by both backends."""
     from formation_env.envs.config import EnvConfig, Randomisation, RewardWeights
 
-    kw = copy.deepcopy(cfg.env_kwargs)
+    kw = copy.deepcopy(env_kwargs)
     kw.update(overrides)
     try:
         rnd = kw.pop("randomisation", {}) or {}
@@ -210,5 +216,5 @@ def make_env_config(cfg: TrainConfig, **overrides):
     learning = kw.pop("learning", "followers")
     if isinstance(learning, list):
         learning = tuple(learning)
-    return EnvConfig(scenario=cfg.scenario, learning=learning, action_mode=cfg.action_mode, obs_mode="flat",
+    return EnvConfig(scenario=scenario, learning=learning, action_mode=action_mode, obs_mode="flat",
                      reward=rew, randomisation=rnd, **kw)

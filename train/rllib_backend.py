@@ -50,13 +50,12 @@ import time
 from collections.abc import Callable
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
-from types import SimpleNamespace
 
 import numpy as np
 
 from formation_env.errors import ClusterUnreachableError, MissingDependencyError
 
-from .config import _ENV_KEYS, HYPERPARAMS_DIR, _merge, _section, load_yaml, make_env_config
+from .config import _ENV_KEYS, HYPERPARAMS_DIR, _merge, _section, env_config_for, load_yaml
 
 __all__ = ["RLlibTrainConfig", "train_rllib", "load_rllib_policy", "is_rllib_checkpoint", "require_rllib",
            "connect", "parse_address", "ClusterUnreachableError", "latest_rllib_checkpoint", "benchmark_sampling",
@@ -147,8 +146,7 @@ class RLlibTrainConfig:
         # Validates the environment options here, without ray (the env itself is built on the runners).
         from formation_env.scenarios import get_scenario
 
-        make_env_config(SimpleNamespace(scenario=self.scenario, action_mode=self.action_mode,
-                                        env_kwargs=self.env_kwargs), learning=self.learning)
+        env_config_for(self.scenario, self.action_mode, self.env_kwargs, learning=self.learning)
         if self.learning == "followers" and not get_scenario(self.scenario).slots:
             raise ValueError(f"scenario {self.scenario!r} flies one UAV: there are no followers to learn "
                              "(use learning='all')")
@@ -193,8 +191,7 @@ def checkpoint_metadata(cfg: RLlibTrainConfig, *, iteration: int, env_steps: int
     """What ``formation-env evaluate`` needs to fly a checkpoint (stored beside RLlib's own files)."""
     import ray
 
-    env = make_env_config(SimpleNamespace(scenario=cfg.scenario, action_mode=cfg.action_mode,
-                                          env_kwargs=cfg.env_kwargs), learning=cfg.learning)
+    env = env_config_for(cfg.scenario, cfg.action_mode, cfg.env_kwargs, learning=cfg.learning)
     return {"backend": "rllib", "algo": "ppo", "scenario": cfg.scenario, "action_mode": cfg.action_mode,
             "learning": cfg.learning, "policies": cfg.policies, "modules": cfg.modules, "control_hz": env.control_hz,
             "seed": cfg.seed, "iteration": int(iteration), "env_steps": int(env_steps), "ray_version": ray.__version__}

@@ -7,15 +7,13 @@ mapping functions by reference, so every node of a cluster needs this project in
 
 from __future__ import annotations
 
-from types import SimpleNamespace
-
 import numpy as np
 
 from ray.rllib.env.wrappers.pettingzoo_env import ParallelPettingZooEnv
 
 from formation_env.envs.parallel import FormationParallelEnv
 
-from .config import make_env_config
+from .config import env_config_for
 
 __all__ = ["FormationMultiAgentEnv", "shared_policy", "role_policy", "role_of", "LEADER_AGENT", "build_env_config"]
 
@@ -42,9 +40,8 @@ def role_policy(agent_id, *args, **kwargs) -> str:
 def build_env_config(env_config: dict):
     """The EnvConfig of an RLlib env_config dict (``scenario``, ``action_mode``, ``learning``,
     ``env_kwargs``; flat observations, as for SB3)."""
-    ns = SimpleNamespace(scenario=env_config["scenario"], action_mode=env_config["action_mode"],
-                         env_kwargs=dict(env_config.get("env_kwargs") or {}))
-    return make_env_config(ns, learning=env_config.get("learning", "followers"))
+    return env_config_for(env_config["scenario"], env_config["action_mode"], env_config.get("env_kwargs") or {},
+                          learning=env_config.get("learning", "followers"))
 
 
 class FormationMultiAgentEnv(ParallelPettingZooEnv):

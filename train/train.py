@@ -26,10 +26,8 @@ import importlib.util
 import io
 import json
 import math
-import os
 import re
 import sys
-import tempfile
 import time
 from collections.abc import Callable
 from pathlib import Path
@@ -57,29 +55,17 @@ def default_run_dir(scenario: str, algo: str, action_mode: str, seed: int, root:
 
 
 def save_model_atomic(model, path: Path) -> Path:
-    """``model.save`` to a temporary name in the same directory, then rename into place."""
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.stem}.", suffix=".zip", dir=path.parent)
-    os.close(fd)
-    try:
-        model.save(tmp)
-        os.replace(tmp, path)
-    finally:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
-    return path
+    """``model.save`` to a temporary name in the same directory, then rename into place (the run's
+    own files are replaced: checkpoints and final/best models belong to this run)."""
+    from formation_env.io import atomic_write
+
+    return atomic_write(path, lambda tmp: model.save(str(tmp)), overwrite=True)
 
 
 def _save_buffer_atomic(model, path: Path) -> None:
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.stem}.", suffix=".pkl", dir=path.parent)
-    os.close(fd)
-    try:
-        model.save_replay_buffer(tmp)
-        os.replace(tmp, path)
-    finally:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
+    from formation_env.io import atomic_write
+
+    atomic_write(path, lambda tmp: model.save_replay_buffer(str(tmp)), overwrite=True)
 
 
 def _write_text_atomic(path: Path, text: str) -> None:

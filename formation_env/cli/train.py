@@ -34,18 +34,6 @@ def _nonneg_int(text: str) -> int:
     return value
 
 
-def _seed(text: str) -> int:
-    import argparse
-
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"must be an integer >= 0, got {text!r}") from None
-    if value < 0:
-        raise argparse.ArgumentTypeError(f"must be an integer >= 0, got {text!r}")
-    return value
-
-
 def register(sub) -> None:
     from train.config import ACTION_MODES, ALGOS
 
@@ -63,7 +51,7 @@ def register(sub) -> None:
     p.add_argument("--steps", type=_positive_int, default=None,
                    help="total environment steps (sb3: agent decisions; rllib: formation decisions); default: "
                         "n_timesteps of the hyperparameters")
-    p.add_argument("--seed", type=_seed, default=None, help="seed of the env, the model and torch (default 0)")
+    p.add_argument("--seed", type=_nonneg_int, default=None, help="seed of the env, the model and torch (default 0)")
     p.add_argument("--config", default=None,
                    help="YAML hyperparameter file merged over train/hyperparams/<algo>.yml (rllib: rllib_ppo.yml)")
     p.add_argument("--out", default=None, help="run directory (default runs/<scenario>-<algo>-<mode>-seed<k>-<timestamp>)")
