@@ -12,7 +12,8 @@ used for scenarios without their own), in the style of the RL Baselines3 Zoo::
       env_kwargs:                   # EnvConfig options; randomisation / reward are sub-dicts
         randomisation: {turbulence_sigma_mps: 1.0, initial_offset_m: 1.0}
       eval_freq: 50000              # evaluate every this many env steps (0: never)
-      eval_episodes: 8              # held-out validation episodes per evaluation
+      eval_episodes: 32             # held-out validation episodes per evaluation (>= 32; drawn like
+                                    # the test set of `formation-env evaluate`, on their own seeds)
       checkpoint_freq: 100000       # checkpoint every this many env steps (0: never)
       reward_scale: 0.05            # rewards seen by the learner are multiplied by this (the curves
                                     # and evaluations report the unscaled env reward)
@@ -30,7 +31,7 @@ from dataclasses import asdict, dataclass, field
 from pathlib import Path
 
 __all__ = ["ALGOS", "ACTION_MODES", "TrainConfig", "load_hyperparams", "load_yaml", "make_env_config", "env_config_for",
-           "VALIDATION_SEED_BASE", "TEST_SEED_BASE"]
+           "VALIDATION_SEED_BASE", "TEST_SEED_BASE", "MIN_VALIDATION_EPISODES"]
 
 ALGOS = ("ppo", "sac", "td3")
 ACTION_MODES = ("surfaces", "residual", "setpoints")
@@ -40,6 +41,9 @@ HYPERPARAMS_DIR = Path(__file__).resolve().parent / "hyperparams"
 # numpy's SeedSequence, so any seed >= 2**32 is provably never a training episode's seed.
 VALIDATION_SEED_BASE = 10_000_000_000  # the eval callback's (model selection) episodes
 TEST_SEED_BASE = 20_000_000_000        # `formation-env evaluate`'s default episodes
+# Validation episodes per evaluation recommended for model selection (the default; fewer are allowed,
+# for tests, with a note in the log).
+MIN_VALIDATION_EPISODES = 32
 
 _TRAIN_KEYS = {"n_timesteps", "n_formations", "policy", "policy_kwargs", "env_kwargs", "eval_freq",
                "eval_episodes", "checkpoint_freq", "torch_threads", "reward_scale"}
@@ -55,7 +59,7 @@ _ALGO_KEYS = {
 }
 _POLICY_KWARGS = {"net_arch", "log_std_init", "activation_fn", "ortho_init", "squash_output", "n_critics",
                   "use_expln", "full_std", "share_features_extractor"}
-_ENV_KEYS = {"control_hz", "wake", "collision_separation_b", "duration_s", "compute_benefit", "reward",
+_ENV_KEYS = {"control_hz", "wake", "collision_separation_b", "duration_s", "compute_benefit", "reward", "turbulence_field",
              "randomisation", "learning"}
 
 
@@ -120,7 +124,7 @@ class TrainConfig:
     policy_kwargs: dict = field(default_factory=dict)
     env_kwargs: dict = field(default_factory=dict)
     eval_freq: int = 50_000
-    eval_episodes: int = 8
+    eval_episodes: int = MIN_VALIDATION_EPISODES
     checkpoint_freq: int = 100_000
     torch_threads: int = 1
     reward_scale: float = 1.0

@@ -25,12 +25,29 @@ reconfig_success               (scenarios with a moving slot) no collision or cr
 reconfig_time_s                time from the start of the slot schedule until the follower is within
                                1 span of its final slot for good (NaN when it never is)
 =============================  ======================================================================
+
+Statistics (``train/stats.py``; 95 %, bootstrap intervals percentile with 10,000 resamples drawn from a
+fixed seed, so the same episodes always give the same numbers):
+
+* per policy (``summary``): the means above, ``rms_slot_error_m_ci`` (bootstrap interval of the mean),
+  ``collisions`` / ``collision_rate`` / ``collision_rate_ci`` (Wilson), ``reconfig_success_rate`` /
+  ``reconfig_success_rate_ci`` (Wilson), ``min_separation_m`` (smallest over all episodes) and
+  ``min_separation_m_p05`` (5th percentile of the per-episode minima);
+* ``comparisons[<policy>][<baseline>]``: every policy against each baseline evaluated beside it ("pid",
+  "pid_formation"; and pid_formation against pid), paired by episode: :func:`train.stats.paired_comparison`
+  of the per-episode RMS slot error (reduction = baseline - policy, m, mean and median with intervals,
+  relative reduction of the mean, fraction of episodes better, sign test) and, with a moving slot,
+  :func:`train.stats.paired_rate_difference` of the reconfiguration success;
+* ``groups[<name>]``: policies ``<name>_seed<k>`` (the same recipe trained with several seeds; two or
+  more), or the ``groups`` argument: each summary metric's mean, std (ddof 1), min and max across the
+  seeds, and the paired comparison of the seed-averaged per-episode metric against each baseline.
 """
 
 from __future__ import annotations
 
 import json
 import math
+import re
 import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
@@ -39,12 +56,16 @@ from pathlib import Path
 import numpy as np
 
 from .config import ACTION_MODES, ALGOS, TEST_SEED_BASE
+from .stats import N_BOOT, bootstrap_ci, paired_comparison, paired_rate_difference, seed_spread, wilson_interval
 
-__all__ = ["EvalPolicy", "load_policy", "run_episodes", "summarise", "evaluate", "eval_env_config",
-           "SUCCESS_WINDOW_S", "SPAN_M"]
+__all__ = ["EvalPolicy", "load_policy", "run_episodes", "summarise", "evaluate", "eval_env_config", "compare_episodes",
+           "comparisons", "seed_groups", "group_report", "BASELINES", "TEST_EPISODES", "SUCCESS_WINDOW_S", "SPAN_M"]
 
 SPAN_M = 2.9
 SUCCESS_WINDOW_S = 5.0
+TEST_EPISODES = 100                    # held-out test episodes per policy by default
+BASELINES = ("pid", "pid_formation")   # the classical controllers every other policy is compared with
+_SEED_NAME = re.compile(r"^(?P<group>.+)_seed(?P<seed>\d+)$")
 
 
 @dataclass
@@ -56,10 +77,27 @@ class EvalPolicy:
     act: Callable[[np.ndarray], np.ndarray]
     control_hz: float = 10.0
     path: str | None = None
+    reset: Callable[[int], None] | None = None
+    """Called once by :func:`run_episodes` with the number of rows (formations x learning UAVs)
+    before the first decision (stateful policies: a PID's integrators)."""
 
 
 def _pid_policy() -> EvalPolicy:
     return EvalPolicy("pid", "residual", lambda obs: np.zeros((obs.shape[0], 4), dtype=np.float32))
+
+
+def _pid_formation_policy() -> EvalPolicy:
+    """The classical formation-keeping controller (``agents.pid_formation.PIDFormation``), imported
+    only here: a stateful agent whose ``reset(n_rows)`` runs before every batch of episodes."""
+    try:
+        from agents.pid_formation import PIDFormation
+    except ModuleNotFoundError as exc:
+        if exc.name not in ("agents.pid_formation", "agents"):
+            raise
+        raise ValueError("policy 'pid_formation' needs agents/pid_formation.py, which this checkout does not have") from None
+
+    agent = PIDFormation()
+    return EvalPolicy("pid_formation", str(agent.action_mode), agent.act, float(agent.control_hz), reset=agent.reset)
 
 
 def _policy_metadata(path: Path) -> dict:
@@ -80,11 +118,14 @@ def _policy_metadata(path: Path) -> dict:
 
 
 def load_policy(spec: str, *, action_mode: str | None = None, name: str | None = None, device: str = "cpu") -> EvalPolicy:
-    """``"pid"``, the path of an SB3 zip (its algo and action mode come from the sidecar JSON or the
-    run's config.yaml; ``action_mode`` overrides), or an RLlib checkpoint / run directory of
-    ``formation-env train --backend rllib`` (its metadata fixes the action mode)."""
+    """``"pid"`` (the thesis FCS: zero residual), ``"pid_formation"`` (the classical formation-keeping
+    baseline of ``agents.pid_formation``), the path of an SB3 zip (its algo and action mode come from
+    the sidecar JSON or the run's config.yaml; ``action_mode`` overrides), or an RLlib checkpoint / run
+    directory of ``formation-env train --backend rllib`` (its metadata fixes the action mode)."""
     if spec == "pid":
         return _pid_policy()
+    if spec == "pid_formation":
+        return _pid_formation_policy()
     path = Path(spec)
     if path.is_dir():
         # An RLlib checkpoint (or run directory); ray is imported only here, and only then.
@@ -98,8 +139,8 @@ def load_policy(spec: str, *, action_mode: str | None = None, name: str | None =
                              "(an RLlib checkpoint's metadata fixes its action mode; leave out --action-mode)")
         return pol
     if not path.is_file():
-        raise ValueError(f"policy file {spec!r} does not exist (give an SB3 .zip, an RLlib checkpoint directory "
-                         "or 'pid')")
+        raise ValueError(f"policy file {spec!r} does not exist (give an SB3 .zip, an RLlib checkpoint directory, "
+                         "'pid' or 'pid_formation')")
     meta = _policy_metadata(path)
     mode = action_mode or meta.get("action_mode")
     if mode is None:
@@ -130,7 +171,9 @@ def load_policy(spec: str, *, action_mode: str | None = None, name: str | None =
 
 def eval_env_config(scenario: str, action_mode: str, *, turbulence_sigma_mps: float = 1.0, wake: bool = True,
                     control_hz: float = 10.0, compute_benefit: bool = False, duration_s: float | None = None):
-    """The evaluation episodes' EnvConfig: the thesis scenario with wake and Dryden turbulence on."""
+    """The evaluation episodes' EnvConfig: the thesis scenario with wake and Dryden turbulence on. With
+    its defaults (sigma 1 m/s, wake on, the scenario's duration, no other randomisation) it is the test
+    set's distribution, which the training's validation (model selection) also uses."""
     from formation_env.envs.config import EnvConfig, Randomisation
 
     return EnvConfig(scenario=scenario, learning="followers", action_mode=action_mode, wake=wake, control_hz=control_hz,
@@ -143,8 +186,10 @@ def _moving_slot(scenario) -> bool:
 
 
 def run_episodes(act: Callable[[np.ndarray], np.ndarray], config, seeds: Sequence[int], *,
-                 keep_series: bool = False) -> list[dict]:
-    """Fly one episode per seed (all in one batch) and return the per-episode metrics."""
+                 keep_series: bool = False, reset: Callable[[int], None] | None = None) -> list[dict]:
+    """Fly one episode per seed (all in one batch) and return the per-episode metrics. ``reset`` (a
+    stateful policy's) is called once with the number of observation rows, formations x learning
+    UAVs, before the first decision."""
     from agents.observation import slot_demand
     from formation_env.envs.core import FormationCore
     from formation_env.envs.rewards import min_separation_m, slot_error_m
@@ -170,6 +215,8 @@ def run_episodes(act: Callable[[np.ndarray], np.ndarray], config, seeds: Sequenc
     duration = eng.duration_s
     final_offsets = [np.asarray(s.offset_and_rate(duration)[0]) for s in sc.slots]
     trim = eng.trim.controls[0, :4]
+    if reset is not None:
+        reset(b * a_n)
     k = 0
     while alive.any():
         obs = core.observations()[:, agents].reshape(b * a_n, -1).astype(np.float32)
@@ -266,20 +313,32 @@ _MEAN_KEYS = ("return", "rms_slot_error_m", "max_slot_error_m", "time_within_1m_
               "induced_drag_saving", "duration_s")
 
 
-def summarise(episodes: list[dict]) -> dict:
-    """Aggregate per-episode metrics (means, and the worst case where it matters)."""
-    s = {"episodes": len(episodes)}
+def summarise(episodes: list[dict], *, n_boot: int = N_BOOT, seed: int = 0) -> dict:
+    """Aggregate per-episode metrics: means, the worst case where it matters, and 95 % intervals
+    (bootstrap of the mean RMS error with ``n_boot`` resamples from ``seed``; Wilson intervals of the
+    collision and reconfiguration-success rates)."""
+    n = len(episodes)
+    s = {"episodes": n}
     for k in _MEAN_KEYS:
         vals = [e[k] for e in episodes if k in e]
         if vals:
             s[k] = float(np.mean(vals))
-    s["rms_slot_error_m_std"] = float(np.std([e["rms_slot_error_m"] for e in episodes]))
+    rms = np.array([e["rms_slot_error_m"] for e in episodes], dtype=float)
+    s["rms_slot_error_m_ci"] = list(bootstrap_ci(rms, "mean", n_boot=n_boot, seed=seed))
+    s["rms_slot_error_m_median"] = float(np.median(rms))
+    s["rms_slot_error_m_std"] = float(np.std(rms))
     s["max_slot_error_m_worst"] = float(max(e["max_slot_error_m"] for e in episodes))
-    s["min_separation_m"] = float(min(e["min_separation_m"] for e in episodes))
+    seps = np.array([e["min_separation_m"] for e in episodes], dtype=float)
+    s["min_separation_m"] = float(np.min(seps))
+    s["min_separation_m_p05"] = float(np.percentile(seps, 5))
     s["collisions"] = int(sum(e["collision"] for e in episodes))
+    s["collision_rate"] = s["collisions"] / n
+    s["collision_rate_ci"] = list(wilson_interval(s["collisions"], n))
     s["crashes"] = int(sum(e["crashed"] for e in episodes))
     if "reconfig_success" in episodes[0]:
-        s["reconfig_success_rate"] = float(np.mean([e["reconfig_success"] for e in episodes]))
+        k = int(sum(e["reconfig_success"] for e in episodes))
+        s["reconfig_success_rate"] = k / n
+        s["reconfig_success_rate_ci"] = list(wilson_interval(k, n))
         times = [e["reconfig_time_s"] for e in episodes if not math.isnan(e["reconfig_time_s"])]
         s["reconfig_time_s"] = float(np.mean(times)) if times else float("nan")
     return s
@@ -296,33 +355,200 @@ def selection_score(summary: dict) -> float:
     return float(score)
 
 
+# ------------------------------------------------------------------ comparisons and seed groups
+def _column(episodes: list[dict], key: str) -> np.ndarray:
+    return np.array([float(e[key]) for e in episodes])
+
+
+def _check_paired(a: list[dict], b: list[dict]) -> None:
+    sa, sb = [e["seed"] for e in a], [e["seed"] for e in b]
+    if sa != sb:
+        raise ValueError("paired comparison needs the same episodes (seeds) in the same order")
+
+
+def compare_episodes(baseline: list[dict], candidate: list[dict] | None = None, *,
+                     candidate_values: dict[str, np.ndarray] | None = None, n_boot: int = N_BOOT, seed: int = 0) -> dict:
+    """Paired comparison of a candidate with a baseline on the same episodes: ``rms_slot_error_m``
+    (:func:`train.stats.paired_comparison`, reduction = baseline - candidate in m) and, when the
+    episodes have it, ``reconfig_success`` (:func:`train.stats.paired_rate_difference`, candidate -
+    baseline). The candidate is its episode list or, for a seed group, ``candidate_values``: the
+    per-episode values (seed-averaged) keyed by metric."""
+    if candidate is not None:
+        _check_paired(baseline, candidate)
+        candidate_values = {k: _column(candidate, k) for k in ("rms_slot_error_m", "reconfig_success")
+                            if k in candidate[0]}
+    assert candidate_values is not None
+    out = {"rms_slot_error_m": paired_comparison(_column(baseline, "rms_slot_error_m"),
+                                                 candidate_values["rms_slot_error_m"], n_boot=n_boot, seed=seed)}
+    if "reconfig_success" in baseline[0] and "reconfig_success" in candidate_values:
+        out["reconfig_success"] = paired_rate_difference(_column(baseline, "reconfig_success"),
+                                                         candidate_values["reconfig_success"], n_boot=n_boot, seed=seed)
+    return out
+
+
+def comparisons(episodes: dict[str, list[dict]], baselines: dict[str, str] | None = None, *,
+                candidates: Sequence[str] | None = None, n_boot: int = N_BOOT) -> dict:
+    """``{policy: {baseline: compare_episodes(...)}}`` for every candidate policy against every
+    baseline present, and pid_formation against pid when both are. ``baselines`` maps the baseline
+    kind ("pid", "pid_formation") to its policy name (default: the names themselves, when evaluated);
+    ``candidates`` defaults to every other policy except a baseline given twice ("pid-2")."""
+    if baselines is None:
+        baselines = {b: b for b in BASELINES if b in episodes}
+    base_names = set(baselines.values())
+    if candidates is None:
+        candidates = [n for n in episodes if n not in base_names and not _is_duplicate_baseline(n, base_names)]
+    out: dict[str, dict] = {}
+    for name in candidates if baselines else ():
+        out[name] = {b: compare_episodes(episodes[b], episodes[name], n_boot=n_boot) for b in baselines.values()}
+    if "pid" in baselines and "pid_formation" in baselines:
+        pf, p = baselines["pid_formation"], baselines["pid"]
+        out[pf] = {p: compare_episodes(episodes[p], episodes[pf], n_boot=n_boot)}
+    return out
+
+
+def _is_duplicate_baseline(name: str, base_names: set[str]) -> bool:
+    """"pid-2" etc.: a baseline given twice (renamed by :func:`evaluate`) is not a candidate."""
+    head, _, tail = name.rpartition("-")
+    return head in base_names and tail.isdigit()
+
+
+def seed_groups(names: Sequence[str]) -> dict[str, list[str]]:
+    """Groups of policy names ``<group>_seed<k>`` with two or more members (in the given order)."""
+    found: dict[str, list[str]] = {}
+    for n in names:
+        m = _SEED_NAME.match(n)
+        if m:
+            found.setdefault(m.group("group"), []).append(n)
+    return {g: members for g, members in found.items() if len(members) >= 2}
+
+
+def _scalar_metrics(summary: dict) -> list[str]:
+    return [k for k, v in summary.items()
+            if k not in ("episodes", "wall_s") and isinstance(v, (int, float)) and not isinstance(v, bool)]
+
+
+def group_report(members: dict[str, dict], baselines: dict[str, list[dict]], *, n_boot: int = N_BOOT) -> dict:
+    """One policy trained with several seeds: ``members`` maps each seed's policy name to its
+    ``{"summary", "episodes"}``. Returns ``policies``, ``n_seeds``, ``summary`` (for every scalar
+    summary metric, :func:`train.stats.seed_spread` of the seeds' values: mean, std, min, max, n),
+    ``per_episode`` (the seed-averaged per-episode RMS error, and success when present) and
+    ``comparisons`` ({baseline: compare_episodes} of the seed-averaged per-episode metrics)."""
+    names = list(members)
+    if not names:
+        raise ValueError("a seed group needs at least one policy")
+    first = members[names[0]]["episodes"]
+    for n in names[1:]:
+        _check_paired(first, members[n]["episodes"])
+    keys = [k for k in _scalar_metrics(members[names[0]]["summary"]) if all(k in members[n]["summary"] for n in names)]
+    summary = {k: seed_spread([members[n]["summary"][k] for n in names]) for k in keys}
+    per_episode = {k: np.mean([_column(members[n]["episodes"], k) for n in names], axis=0)
+                   for k in ("rms_slot_error_m", "reconfig_success") if k in first[0]}
+    comps = {b: compare_episodes(eps, candidate_values=per_episode, n_boot=n_boot) for b, eps in baselines.items()}
+    return {"policies": names, "n_seeds": len(names), "summary": summary,
+            "per_episode": {k: v.tolist() for k, v in per_episode.items()}, "comparisons": comps}
+
+
 # ------------------------------------------------------------------ report
 _TABLE = (("rms_slot_error_m", "RMS slot error (m)", "{:.3f}"), ("max_slot_error_m", "max slot error (m, mean)", "{:.2f}"),
           ("max_slot_error_m_worst", "max slot error (m, worst)", "{:.2f}"),
           ("time_within_1m_frac", "time within 1 m (fraction)", "{:.3f}"),
-          ("min_separation_m", "min separation (m)", "{:.2f}"), ("collisions", "collisions", "{:d}"),
+          ("min_separation_m", "min separation (m)", "{:.2f}"),
+          ("min_separation_m_p05", "min separation (m, 5th percentile of episodes)", "{:.2f}"),
+          ("collisions", "collisions", "{:d}"),
           ("crashes", "crashes", "{:d}"), ("reconfig_success_rate", "reconfiguration success", "{:.2f}"),
           ("reconfig_time_s", "reconfiguration time (s)", "{:.1f}"),
           ("control_effort_rad", "control effort (rad RMS)", "{:.4f}"), ("throttle_mean", "mean throttle", "{:.3f}"),
           ("fuel_saving_pct", "follower fuel saving vs leader (%)", "{:.2f}"),
           ("induced_drag_saving", "induced-drag saving (ELL)", "{:.4f}"), ("return", "episode return", "{:.1f}"))
+_PLOT_KEYS = ("rms_slot_error_m", "max_slot_error_m", "max_slot_error_m_worst", "time_within_1m_frac", "min_separation_m",
+              "control_effort_rad", "fuel_saving_pct")
+
+
+def _fmt(v, fmt: str = "{:.3f}") -> str:
+    if v is None:
+        return "-"
+    if isinstance(v, float) and math.isnan(v):
+        return "nan"
+    return fmt.format(v)
+
+
+def _cell(s: dict, key: str, fmt: str) -> str:
+    v = s.get(key)
+    if v is None:
+        return "-"
+    if key == "rms_slot_error_m" and "rms_slot_error_m_ci" in s:
+        lo, hi = s["rms_slot_error_m_ci"]
+        return f"{_fmt(v, fmt)} [{_fmt(lo, fmt)}, {_fmt(hi, fmt)}]"
+    if key in ("collisions", "crashes") and "episodes" in s:
+        return f"{v}/{s['episodes']}"
+    if key == "reconfig_success_rate" and "reconfig_success_rate_ci" in s:
+        lo, hi = s["reconfig_success_rate_ci"]
+        return f"{_fmt(v, fmt)} [{_fmt(lo, fmt)}, {_fmt(hi, fmt)}]"
+    return _fmt(v, fmt)
 
 
 def markdown_table(summaries: dict[str, dict]) -> str:
+    """Per-policy metrics; the RMS error as mean [95 % bootstrap CI], collisions (and crashes) as k/n,
+    the reconfiguration success as rate [95 % Wilson CI]."""
     names = list(summaries)
-    lines = ["| metric | " + " | ".join(names) + " |", "|---|" + "---|" * len(names)]
+    lines = ["| metric (mean over episodes [95 % CI]) | " + " | ".join(names) + " |", "|---|" + "---|" * len(names)]
     for key, label, fmt in _TABLE:
         if not any(key in s for s in summaries.values()):
             continue
-        cells = []
-        for n in names:
-            v = summaries[n].get(key)
-            cells.append("-" if v is None else ("nan" if isinstance(v, float) and math.isnan(v) else fmt.format(v)))
-        lines.append(f"| {label} | " + " | ".join(cells) + " |")
+        lines.append(f"| {label} | " + " | ".join(_cell(summaries[n], key, fmt) for n in names) + " |")
     if "pid" in summaries:
         base = summaries["pid"]["rms_slot_error_m"]
         cells = [f"{100.0 * (1.0 - summaries[n]['rms_slot_error_m'] / base):+.1f} %" for n in names]
         lines.append("| RMS error reduction vs PID | " + " | ".join(cells) + " |")
+    return "\n".join(lines) + "\n"
+
+
+def _ci(pair, fmt: str) -> str:
+    return f"[{_fmt(pair[0], fmt)}, {_fmt(pair[1], fmt)}]"
+
+
+def comparison_table(comps: dict[str, dict], groups: dict[str, dict] | None = None) -> str:
+    """The paired comparisons (per-episode RMS slot error, reduction = baseline - policy, m): one row per
+    policy (or seed group) and baseline."""
+    rows = [(p, b, c) for p, per in comps.items() for b, c in per.items()]
+    rows += [(f"{g} (mean of {r['n_seeds']} seeds)", b, c) for g, r in (groups or {}).items()
+             for b, c in r["comparisons"].items()]
+    if not rows:
+        return ""
+    success = any("reconfig_success" in c for _, _, c in rows)
+    head = ("| policy | baseline | reduction of the mean (m) | 95 % CI | reduction of the median (m) | 95 % CI | "
+            "relative (%) [95 % CI] | better | sign-test p |" + (" success difference [95 % CI] |" if success else ""))
+    lines = [head, "|---" * (9 + success) + "|"]
+    for p, b, c in rows:
+        r = c["rms_slot_error_m"]
+        cells = [p, b, _fmt(r["mean_reduction"]), _ci(r["mean_reduction_ci"], "{:.3f}"), _fmt(r["median_reduction"]),
+                 _ci(r["median_reduction_ci"], "{:.3f}"),
+                 f"{_fmt(r['relative_reduction_pct'], '{:+.1f}')} {_ci(r['relative_reduction_pct_ci'], '{:+.1f}')}",
+                 f"{r['n_better']}/{r['n']} ({100 * r['fraction_better']:.0f} %)", f"{r['sign_test_p']:.3g}"]
+        if success:
+            s = c.get("reconfig_success")
+            cells.append("-" if s is None else f"{s['difference']:+.2f} {_ci(s['difference_ci'], '{:+.2f}')}")
+        lines.append("| " + " | ".join(cells) + " |")
+    return "\n".join(lines) + "\n"
+
+
+def groups_table(groups: dict[str, dict]) -> str:
+    """Seed groups: mean +- std (min .. max) across the training seeds of a few summary metrics."""
+    if not groups:
+        return ""
+    keys = [("rms_slot_error_m", "RMS slot error (m)", "{:.3f}"), ("collision_rate", "collision rate", "{:.3f}"),
+            ("reconfig_success_rate", "reconfiguration success", "{:.2f}"),
+            ("min_separation_m", "min separation (m)", "{:.2f}")]
+    keys = [k for k in keys if any(k[0] in g["summary"] for g in groups.values())]
+    lines = ["| group | seeds | " + " | ".join(lbl + ", mean ± std (min .. max)" for _, lbl, _ in keys) + " |",
+             "|---|---|" + "---|" * len(keys)]
+    for name, g in groups.items():
+        cells = []
+        for k, _, fmt in keys:
+            s = g["summary"].get(k)
+            cells.append("-" if s is None else
+                         f"{_fmt(s['mean'], fmt)} ± {_fmt(s['std'], fmt)} ({_fmt(s['min'], fmt)} .. {_fmt(s['max'], fmt)})")
+        lines.append(f"| {name} | {g['n_seeds']} | " + " | ".join(cells) + " |")
     return "\n".join(lines) + "\n"
 
 
@@ -336,12 +562,17 @@ def _plots(out_dir: Path, results: dict[str, dict], scenario: str, *, overwrite:
 
     names = list(results)
     written = []
-    keys = [(k, lbl) for k, lbl, _ in _TABLE[:5] + _TABLE[9:10] + _TABLE[11:12]
-            if all(k in results[n]["summary"] for n in names)]
+    labels = {k: lbl for k, lbl, _ in _TABLE}
+    keys = [(k, labels[k]) for k in _PLOT_KEYS if all(k in results[n]["summary"] for n in names)]
     fig, axes = plt.subplots(1, len(keys), figsize=(3.0 * len(keys), 3.2))
     for ax, (k, lbl) in zip(np.atleast_1d(axes), keys):
-        vals = [results[n]["summary"][k] for n in names]
-        ax.bar(range(len(names)), vals, color=[f"C{i}" for i in range(len(names))])
+        summ = [results[n]["summary"] for n in names]
+        vals = [s[k] for s in summ]
+        yerr = None
+        if all(f"{k}_ci" in s for s in summ):
+            yerr = np.array([[v - s[f"{k}_ci"][0], s[f"{k}_ci"][1] - v] for v, s in zip(vals, summ)]).T
+            lbl += " (95 % CI)"
+        ax.bar(range(len(names)), vals, yerr=yerr, capsize=3, color=[f"C{i}" for i in range(len(names))])
         ax.set_xticks(range(len(names)), names, rotation=30, ha="right", fontsize=8)
         ax.set_title(lbl, fontsize=9)
     fig.suptitle(f"{scenario}: held-out episodes, wake + Dryden turbulence")
@@ -370,18 +601,26 @@ def _plots(out_dir: Path, results: dict[str, dict], scenario: str, *, overwrite:
     return written
 
 
-def evaluate(policies: Sequence[str], *, scenario: str, episodes: int = 20, seeds: Sequence[int] | None = None,
+def evaluate(policies: Sequence[str], *, scenario: str, episodes: int = TEST_EPISODES, seeds: Sequence[int] | None = None,
              turbulence_sigma_mps: float = 1.0, wake: bool = True, compute_benefit: bool = False,
              action_mode: str | None = None, out_dir: str | Path | None = None, overwrite: bool = False,
-             plots: bool = True, duration_s: float | None = None, log: Callable[[str], None] | None = None) -> dict:
-    """Evaluate ``policies`` ("pid" or zip paths) on the same held-out episodes; optionally write
-    ``results.json``, ``results.md`` and comparison plots into ``out_dir`` (a new directory)."""
+             plots: bool = True, duration_s: float | None = None, groups: dict[str, Sequence[str]] | None = None,
+             n_boot: int = N_BOOT, log: Callable[[str], None] | None = None) -> dict:
+    """Evaluate ``policies`` ("pid", "pid_formation", SB3 zips or RLlib checkpoints) on the same held-out
+    episodes (``episodes`` seeds from ``TEST_SEED_BASE``, or from ``seeds[0]``, or exactly ``seeds`` when
+    it holds several: then ``episodes`` is not used); optionally write ``results.json``, ``results.md``
+    and comparison plots into ``out_dir`` (a new directory).
+
+    The report: ``policies.<name>.summary`` / ``.episodes`` (see :func:`summarise`), ``comparisons``
+    (:func:`comparisons`: every policy against each baseline evaluated with it), ``groups`` (seed groups:
+    policies ``<name>_seed<k>`` and the ``groups`` argument {group: [policy names]}, see
+    :func:`group_report`), ``statistics`` (how the intervals were computed) and the markdown tables."""
     from formation_env.scenarios import scenario_names
 
     if scenario not in scenario_names():
         raise ValueError(f"unknown scenario {scenario!r}; available: {scenario_names()}")
     if not policies:
-        raise ValueError("give at least one policy (a .zip path or 'pid')")
+        raise ValueError("give at least one policy (a .zip path, an RLlib checkpoint, 'pid' or 'pid_formation')")
     if isinstance(episodes, bool) or not isinstance(episodes, int) or episodes < 1:
         raise ValueError(f"episodes must be an integer >= 1, got {episodes!r}")
     if not (isinstance(turbulence_sigma_mps, (int, float)) and math.isfinite(turbulence_sigma_mps) and turbulence_sigma_mps >= 0):
@@ -394,14 +633,28 @@ def evaluate(policies: Sequence[str], *, scenario: str, episodes: int = 20, seed
         seeds = [int(s) for s in seeds]
     if any(s < 0 for s in seeds):
         raise ValueError(f"seeds must be >= 0, got {[s for s in seeds if s < 0]}")
-    loaded = []
+    loaded, specs = [], {}
     for spec in policies:
-        pol = load_policy(spec, action_mode=action_mode if spec != "pid" else None)
+        pol = load_policy(spec, action_mode=action_mode if spec not in BASELINES else None)
         base, n = pol.name, 2
         while pol.name in [p.name for p in loaded]:
             pol.name = f"{base}-{n}"
             n += 1
         loaded.append(pol)
+        specs[pol.name] = spec
+    names = [p.name for p in loaded]
+    group_spec = seed_groups(names)
+    for g, members in (groups or {}).items():
+        members = list(members)
+        unknown = [m for m in members if m not in names]
+        if not members or unknown:
+            raise ValueError(f"group {g!r}: {'no policies' if not members else f'unknown policy name(s) {unknown}'}; "
+                             f"the evaluated policies are {names}")
+        group_spec[g] = members
+    baselines = {}
+    for name in names:  # the first policy of each baseline kind is the one compared against
+        if specs[name] in BASELINES and specs[name] not in baselines:
+            baselines[specs[name]] = name
     out = None
     if out_dir is not None:
         from formation_env.io import prepare_output_dir
@@ -412,17 +665,33 @@ def evaluate(policies: Sequence[str], *, scenario: str, episodes: int = 20, seed
         cfg = eval_env_config(scenario, pol.action_mode, turbulence_sigma_mps=turbulence_sigma_mps, wake=wake,
                               control_hz=pol.control_hz, compute_benefit=compute_benefit, duration_s=duration_s)
         t0 = time.perf_counter()
-        eps = run_episodes(pol.act, cfg, seeds, keep_series=True)
-        summ = summarise(eps)
+        eps = run_episodes(pol.act, cfg, seeds, keep_series=True, reset=pol.reset)
+        summ = summarise(eps, n_boot=n_boot)
         summ["wall_s"] = round(time.perf_counter() - t0, 2)
-        results[pol.name] = {"policy": pol.path or "pid", "action_mode": pol.action_mode, "summary": summ, "episodes": eps}
+        results[pol.name] = {"policy": pol.path or specs[pol.name], "action_mode": pol.action_mode, "summary": summ,
+                             "episodes": eps}
         if log:
-            log(f"{pol.name}: RMS slot error {summ['rms_slot_error_m']:.3f} m, collisions {summ['collisions']}"
+            lo, hi = summ["rms_slot_error_m_ci"]
+            log(f"{pol.name}: RMS slot error {summ['rms_slot_error_m']:.3f} m [{lo:.3f}, {hi:.3f}], "
+                f"collisions {summ['collisions']}/{len(seeds)}"
                 + (f", reconfiguration success {summ['reconfig_success_rate']:.2f}" if "reconfig_success_rate" in summ else "")
                 + f" ({summ['wall_s']:.1f} s)")
+    episodes_by_name = {n: r["episodes"] for n, r in results.items()}
+    comps = comparisons(episodes_by_name, baselines, candidates=[n for n in names if specs[n] not in BASELINES],
+                        n_boot=n_boot)
+    base_eps = {b: episodes_by_name[b] for b in baselines.values()}
+    group_reports = {g: group_report({m: results[m] for m in members}, base_eps, n_boot=n_boot)
+                     for g, members in group_spec.items()}
     report = {"scenario": scenario, "seeds": seeds, "wake": wake, "turbulence_sigma_mps": turbulence_sigma_mps,
-              "policies": {n: {k: v for k, v in r.items()} for n, r in results.items()}}
+              "policies": {n: {k: v for k, v in r.items()} for n, r in results.items()},
+              "baselines": baselines, "comparisons": comps, "groups": group_reports,
+              "statistics": {"confidence": 0.95, "n_boot": n_boot, "bootstrap_seed": 0,
+                             "bootstrap": "percentile, episodes resampled jointly across the paired policies",
+                             "rates": "Wilson score interval", "sign_test": "exact two-sided, ties left out",
+                             "reduction": "baseline - policy, per episode, in the metric's units"}}
     report["table_markdown"] = markdown_table({n: r["summary"] for n, r in results.items()})
+    report["comparison_markdown"] = comparison_table(comps, group_reports)
+    report["groups_markdown"] = groups_table(group_reports)
     if out is not None:
         from formation_env.io import atomic_write_json, atomic_write_text
 
@@ -433,8 +702,15 @@ def evaluate(policies: Sequence[str], *, scenario: str, episodes: int = 20, seed
                 e["series"].pop("t")
         atomic_write_json(out / "results.json", slim, overwrite=overwrite)
         head = (f"# Evaluation: {scenario}\n\n{len(seeds)} held-out episodes (seeds {seeds[0]}..{seeds[-1]}), "
-                f"wake {'on' if wake else 'off'}, Dryden turbulence sigma {turbulence_sigma_mps:g} m/s.\n\n")
-        atomic_write_text(out / "results.md", head + report["table_markdown"], overwrite=overwrite)
+                f"wake {'on' if wake else 'off'}, Dryden turbulence sigma {turbulence_sigma_mps:g} m/s. Intervals: 95 %, "
+                f"percentile bootstrap over episodes ({n_boot} resamples, seed 0) for errors, Wilson for rates.\n\n")
+        text = head + report["table_markdown"]
+        if report["comparison_markdown"]:
+            text += ("\n## Paired comparisons (per-episode RMS slot error; reduction = baseline - policy)\n\n"
+                     + report["comparison_markdown"])
+        if report["groups_markdown"]:
+            text += "\n## Training seeds\n\n" + report["groups_markdown"]
+        atomic_write_text(out / "results.md", text, overwrite=overwrite)
         if plots:
             report["plots"] = _plots(out, results, scenario, overwrite=overwrite)
         report["out_dir"] = str(out)

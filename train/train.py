@@ -34,7 +34,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .config import VALIDATION_SEED_BASE, TrainConfig, load_hyperparams, make_env_config
+from .config import MIN_VALIDATION_EPISODES, VALIDATION_SEED_BASE, TrainConfig, load_hyperparams, make_env_config
 
 __all__ = ["train", "default_run_dir", "latest_checkpoint", "progress_bar_available", "build_model"]
 
@@ -179,16 +179,32 @@ def _callbacks(cfg: TrainConfig, run_dir: Path, state: dict, log: Callable[[str]
             return True
 
     class Evaluate(BaseCallback):
-        """Validation on held-out seeds; keeps the best model (lowest selection score)."""
+        """Validation (model selection) on held-out seeds; keeps the best model (lowest selection score).
+
+        The validation episodes are drawn exactly like the test set of ``formation-env evaluate``: the
+        same ``eval_env_config`` with its defaults (wake on, Dryden sigma 1 m/s, no other randomisation,
+        the scenario's duration), whatever the training's ``env_kwargs`` (turbulence, wake, initial
+        offsets, randomisation) say; only the seeds differ (``VALIDATION_SEED_BASE + i`` vs
+        ``TEST_SEED_BASE + i``, both out of the training's range). ``eval_episodes`` of them (32 by
+        default). One exception, logged: a run whose ``env_kwargs`` shortens the episodes
+        (``duration_s``: quick development runs, the tests) validates on episodes of that length, with
+        the same seeds and conditions (like ``formation-env evaluate --duration``)."""
 
         def __init__(self):
             super().__init__()
+            from formation_env.scenarios import get_scenario
+
             self.next = (state["start_steps"] // cfg.eval_freq + 1) * cfg.eval_freq if cfg.eval_freq else None
             env = make_env_config(cfg)
-            self.config = eval_env_config(cfg.scenario, cfg.action_mode, turbulence_sigma_mps=env.randomisation.turbulence_sigma_mps,
-                                          wake=True if env.wake is None else env.wake, control_hz=env.control_hz,
-                                          duration_s=env.duration_s)
+            full = get_scenario(cfg.scenario).duration_s
+            short = env.duration_s if env.duration_s is not None and env.duration_s < full else None
+            self.config = eval_env_config(cfg.scenario, cfg.action_mode, control_hz=env.control_hz, duration_s=short)
             self.seeds = [VALIDATION_SEED_BASE + i for i in range(cfg.eval_episodes)]
+            if short is not None:
+                log(f"note: validation episodes cut to {short:g} s like the training's (the test set flies {full:g} s)")
+            if cfg.eval_episodes < MIN_VALIDATION_EPISODES:
+                log(f"note: validation on {cfg.eval_episodes} episodes (< {MIN_VALIDATION_EPISODES}): the model "
+                    "selection follows noise more than skill")
 
         def _on_step(self) -> bool:
             if self.next is not None and self.num_timesteps >= self.next:

@@ -1,5 +1,7 @@
-"""``formation-env evaluate``: compare policies (SB3 zips and/or the thesis PID) on held-out seeds
-with the wake and Dryden turbulence on; writes results.json, results.md and comparison plots."""
+"""``formation-env evaluate``: compare policies (SB3 zips, RLlib checkpoints, the thesis PID and the
+classical formation-keeping PID) on held-out seeds with the wake and Dryden turbulence on; writes
+results.json (summaries with 95 % intervals, paired comparisons against the baselines, seed groups),
+results.md and comparison plots."""
 
 from __future__ import annotations
 
@@ -21,14 +23,18 @@ def _nonneg_float(text: str) -> float:
 
 def register(sub) -> None:
     from train.config import ACTION_MODES, TEST_SEED_BASE
+    from train.evaluate import TEST_EPISODES
 
     from ..scenarios import scenario_names
 
-    p = sub.add_parser("evaluate", help="evaluate policies against the PID on held-out seeds (wake + turbulence)")
+    p = sub.add_parser("evaluate", help="evaluate policies against the PID baselines on held-out seeds (wake + turbulence)")
     p.add_argument("--policy", action="append", required=True,
-                   help="an SB3 .zip or 'pid'; repeat to compare several side by side")
+                   help="an SB3 .zip, an RLlib checkpoint, 'pid' (thesis FCS) or 'pid_formation' (classical "
+                        "formation-keeping PID); repeat to compare several side by side (policies named "
+                        "<name>_seed<k> are also reported as a seed group)")
     p.add_argument("--scenario", required=True, help=f"one of {scenario_names()}")
-    p.add_argument("--episodes", type=int, default=20, help="episodes per policy (default 20)")
+    p.add_argument("--episodes", type=int, default=None,
+                   help=f"episodes per policy (default {TEST_EPISODES}, or the number of --seeds when several are given)")
     p.add_argument("--seeds", type=int, nargs="+", default=None,
                    help=f"one seed (the first of --episodes consecutive ones) or one per episode "
                         f"(default {TEST_SEED_BASE}.., never used in training)")
@@ -45,18 +51,28 @@ def register(sub) -> None:
 
 
 def run(args) -> int:
-    from train.evaluate import evaluate
+    from train.evaluate import TEST_EPISODES, evaluate
 
-    if args.episodes < 1:
+    if args.episodes is not None and args.episodes < 1:
         raise ValueError(f"--episodes must be >= 1, got {args.episodes}")
-    if args.seeds and len(args.seeds) > 1 and len(args.seeds) != args.episodes:
+    if args.seeds and len(args.seeds) > 1:
+        if args.episodes is not None and args.episodes != len(args.seeds):
+            raise ValueError(f"--episodes {args.episodes} disagrees with the {len(args.seeds)} seeds given by --seeds "
+                             "(give one --seeds value to start --episodes consecutive seeds, or leave out --episodes)")
         args.episodes = len(args.seeds)
+    elif args.episodes is None:
+        args.episodes = TEST_EPISODES
     out = args.out or f"runs/eval-{args.scenario}-{time.strftime('%Y%m%d-%H%M%S')}"
     rep = evaluate(args.policy, scenario=args.scenario, episodes=args.episodes, seeds=args.seeds,
                    turbulence_sigma_mps=args.turbulence, wake=not args.no_wake, compute_benefit=args.benefit,
                    action_mode=args.action_mode, out_dir=out, overwrite=args.overwrite, plots=not args.no_plots,
                    duration_s=args.duration, log=print)
     print(rep["table_markdown"])
+    if rep["comparison_markdown"]:
+        print("paired comparisons (per-episode RMS slot error, reduction = baseline - policy):\n"
+              + rep["comparison_markdown"])
+    if rep["groups_markdown"]:
+        print("training seeds:\n" + rep["groups_markdown"])
     print(f"wrote {out}/results.json, results.md" + ("" if args.no_plots else ", metrics.png, slot_error.png"))
     return 0
 

@@ -5,10 +5,11 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field, fields
 
-__all__ = ["ACTION_MODES", "OBS_MODES", "RewardWeights", "Randomisation", "EnvConfig"]
+__all__ = ["ACTION_MODES", "OBS_MODES", "TURBULENCE_FIELDS", "RewardWeights", "Randomisation", "EnvConfig"]
 
 ACTION_MODES = ("surfaces", "residual", "setpoints")
 OBS_MODES = ("flat", "dict")
+TURBULENCE_FIELDS = ("frozen", "independent")
 
 
 def _finite(owner: str, name: str, value, *, minimum: float | None = None, positive: bool = False) -> float:
@@ -23,18 +24,31 @@ def _finite(owner: str, name: str, value, *, minimum: float | None = None, posit
 
 @dataclass(frozen=True)
 class RewardWeights:
-    """Per-agent reward r = - slot * min(|e| / slot_scale_m, 5)
-                            - effort * |a|^2 / 4 - rate * |a - a_prev|^2 / 4
-                            + benefit * induced-drag saving + progress * (|e_prev| - |e|) / slot_scale_m
-                            - collision * [collision] - crash * [left the envelope or non-finite].
-    e is the agent's position error to its slot (vehicle 0: to its reference path), a its action."""
+    """Per-agent reward (per decision), with e the agent's distance from its slot (m; vehicle 0: from its
+    reference path), h the Huber function h(x) = x^2 / 2 for |x| <= 1 and |x| - 1/2 beyond, d its
+    distance to the nearest other UAV and a its normalised action:
+
+        r = - slot * h(e / slot_scale_m)                                   quadratic near the slot, linear far
+            + progress * (shaping_gamma * Phi(s') - Phi(s)),  Phi = -h(e / slot_scale_m)   potential-based
+            - separation * ((d_safe - d) / (d_safe - d_coll))^2   for d < d_safe        barrier before a collision
+            - effort * |a|^2 / 4 - rate * |a - a_prev|^2 / 4
+            + benefit * induced-drag saving
+            - collision * [collision] - crash * [left the envelope or non-finite]
+
+    d_safe = ``barrier_separation_b`` spans, d_coll = the env's ``collision_separation_b`` spans. The slot
+    term never saturates: it keeps decreasing with the error however far the UAV drifts. The shaping
+    term is potential-based (Ng et al. 1999) and leaves the optimal policy unchanged when
+    ``shaping_gamma`` equals the learner's discount."""
 
     slot: float = 1.0
-    slot_scale_m: float = 10.0
+    slot_scale_m: float = 5.0
     effort: float = 0.01
     rate: float = 0.05
     benefit: float = 0.0
-    progress: float = 0.5
+    progress: float = 1.0
+    shaping_gamma: float = 0.995
+    separation: float = 5.0
+    barrier_separation_b: float = 1.2
     collision: float = 50.0
     crash: float = 50.0
 
@@ -42,6 +56,8 @@ class RewardWeights:
         for f in fields(self):
             _finite("RewardWeights", f.name, getattr(self, f.name), minimum=0.0)
         _finite("RewardWeights", "slot_scale_m", self.slot_scale_m, positive=True)
+        if self.shaping_gamma > 1.0:
+            raise ValueError(f"RewardWeights: shaping_gamma must be in [0, 1], got {self.shaping_gamma!r}")
 
 
 @dataclass(frozen=True)
@@ -51,7 +67,8 @@ class Randomisation:
     initial_offset_m: std of each follower's initial position jitter (NED, m).
     slot_offset_b: std of each slot's offset jitter (spans), applied to the whole schedule.
     steady_wind_mps: maximum steady horizontal wind speed (uniform in [0, max], random direction).
-    turbulence_sigma_mps: Dryden intensity (m/s, all axes; MIL-F-8785C low-altitude scale lengths).
+    turbulence_sigma_mps: Dryden intensity (m/s, all axes; MIL-F-8785C low-altitude scale lengths); the
+        field is one frozen field per formation or independent per UAV (EnvConfig.turbulence_field).
     leader_turn_deg, leader_climb_m, leader_speed_mps: amplitude of one random manoeuvre of the
         reference (heading change, altitude change, speed change), each drawn uniformly in +-amplitude
         and started at a random time in the first half of the episode.
@@ -92,6 +109,10 @@ class EnvConfig:
         infos (also forced on when the benefit weight is > 0).
     wake_update_every: physics steps between ELL solves (1: every 50 Hz step, the default; 2: 25 Hz,
         about twice as fast; the induced wind is held in between).
+    turbulence_field: "frozen" (default): one frozen (Taylor) Dryden field per formation that every
+        UAV samples at its own position, so neighbours feel nearly the same gusts
+        (:mod:`formation_env.atmosphere.frozen_field`); "independent": each UAV its own Dryden
+        stream (uncorrelated gusts, for robustness studies).
     """
 
     scenario: object = "formation_keeping"  # a scenario name or a formation_env.scenarios.Scenario
@@ -104,6 +125,7 @@ class EnvConfig:
     duration_s: float | None = None
     compute_benefit: bool = False
     wake_update_every: int = 1
+    turbulence_field: str = "frozen"
     reward: RewardWeights = field(default_factory=RewardWeights)
     randomisation: Randomisation = field(default_factory=Randomisation)
 
@@ -116,6 +138,8 @@ class EnvConfig:
             raise ValueError(f"EnvConfig: action_mode must be one of {ACTION_MODES}, got {self.action_mode!r}")
         if self.obs_mode not in OBS_MODES:
             raise ValueError(f"EnvConfig: obs_mode must be one of {OBS_MODES}, got {self.obs_mode!r}")
+        if self.turbulence_field not in TURBULENCE_FIELDS:
+            raise ValueError(f"EnvConfig: turbulence_field must be one of {TURBULENCE_FIELDS}, got {self.turbulence_field!r}")
         _finite("EnvConfig", "control_hz", self.control_hz, positive=True)
         _finite("EnvConfig", "collision_separation_b", self.collision_separation_b, minimum=0.0)
         if self.duration_s is not None:

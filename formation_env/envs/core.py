@@ -90,8 +90,11 @@ class FormationCore:
         crashed = status_any != 0
         error = slot_error_m(eng.state, eng.position_demand_now())
         saving = self._saving()
+        with np.errstate(invalid="ignore"):
+            separation = min_separation_m(eng.state)
         terms = reward_terms(self.config.reward, error, self.previous_error, act, self.previous_action, saving,
-                             np.broadcast_to(collided[:, None], error.shape), crashed)
+                             separation, np.broadcast_to(collided[:, None], error.shape), crashed,
+                             self.config.collision_separation_b * AEROSONDE_SPAN_M, AEROSONDE_SPAN_M)
         self.previous_error = error
         self.previous_action = act
         self.last_terms, self.last_saving = terms, saving
@@ -106,7 +109,7 @@ class FormationCore:
         sc = eng.scenario
         return build_observations(eng.state, eng.induced, eng.omega, eng.ambient_wind(), eng.turbulence_body(),
                                   eng.position_demand_now(), eng.velocity_demand, self.previous_action,
-                                  sc.airspeed_mps, sc.altitude_m)
+                                  eng.slot_schedule_features(), eng.controller_state(), sc.airspeed_mps, sc.altitude_m)
 
     @property
     def benefit_enabled(self) -> bool:
@@ -133,6 +136,7 @@ class FormationCore:
         err_vec = eng.state[i, :, 10:13] - eng.position_demand[i]
         with np.errstate(invalid="ignore"):
             sep = min_separation_m(eng.state[i:i + 1])[0]
+        gust = eng.turbulence_gust_ned()[i]
         out = []
         for v in range(eng.n_vehicles):
             info = {
@@ -143,6 +147,7 @@ class FormationCore:
                 "induced_wind_ned_mps": eng.induced[i, v].copy(),
                 "induced_omega_body_rad_s": eng.omega[i, v].copy(),
                 "fuel_kg": float(eng.state[i, v, 13]),
+                "gust_ned_mps": gust[v].copy(),
                 "status": int(eng.status[i, v]),
                 "collision": bool(self.collided[i]),
                 "crashed": bool(self.crashed[i, v]),

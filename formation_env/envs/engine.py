@@ -21,6 +21,8 @@ import numpy as np
 from ..aircraft import trim
 from ..aircraft.state import N_STATES, POS
 from ..atmosphere.dryden import DrydenConfig, DrydenTurbulence, aircraft_seeds
+from ..atmosphere.frozen_field import (frozen_field_advance, frozen_field_init, frozen_field_params, frozen_field_reset,
+                                       frozen_field_sample)
 from ..atmosphere.wind import WindInput
 from ..frames import quaternion_dcm_terms
 from ..scenarios import Scenario, get_scenario
@@ -90,7 +92,15 @@ class FormationEpisode:
         self.manoeuvre = np.zeros((b, 4))  # start time s, heading change rad, altitude change m, speed change m/s
         self.ref_pos = np.zeros((b, 3))
         self.ref_vel = np.zeros((b, 3))
+        # Turbulence: one frozen field per formation (default) or independent Dryden streams per UAV.
         self.turbulence: list[DrydenTurbulence | None] = [None] * b
+        self.gust_ned = np.zeros((b, v, 3))  # frozen-field gust at each UAV's position now, m/s NED
+        sigma = config.randomisation.turbulence_sigma_mps
+        self.frozen_field = config.turbulence_field == "frozen" and sigma > 0
+        if self.frozen_field:
+            scales = DrydenConfig.low_altitude(sc.altitude_m, 1.0, sc.airspeed_mps, sc.dt).length_scale_m
+            self.field_params = frozen_field_params((sigma,) * 3, scales, sc.airspeed_mps, sc.dt)
+            self.field_state = frozen_field_init(self.field_params, b, v)
         self.rngs = [np.random.default_rng(0) for _ in range(b)]
         self._demands_at = None  # step counts at which the stored demands were computed
 
@@ -102,6 +112,7 @@ class FormationEpisode:
         if len(seeds) != len(idx):
             raise ValueError(f"reset: {len(seeds)} seeds for {len(idx)} formations")
         sc, rnd, v = self.scenario, self.config.randomisation, self.n_vehicles
+        field_seeds = []
         for i, seed in zip(idx, seeds):
             rng = np.random.default_rng(seed)
             self.rngs[i] = rng
@@ -127,12 +138,15 @@ class FormationEpisode:
                                      rng.uniform(-rnd.leader_speed_mps, rnd.leader_speed_mps)]
             p0, v0 = sc.reference(0.0)
             self.ref_pos[i], self.ref_vel[i] = p0, v0
+            self.turbulence[i] = None
             if rnd.turbulence_sigma_mps > 0:
-                cfg = DrydenConfig.low_altitude(sc.altitude_m, 1.0, sc.airspeed_mps, sc.dt)
-                cfg = DrydenConfig((rnd.turbulence_sigma_mps,) * 3, cfg.length_scale_m, sc.airspeed_mps, sc.dt)
-                self.turbulence[i] = DrydenTurbulence(cfg, aircraft_seeds(int(rng.integers(2**63 - 1)), v))
-            else:
-                self.turbulence[i] = None
+                turbulence_seed = int(rng.integers(2**63 - 1))
+                if self.frozen_field:
+                    field_seeds.append(turbulence_seed)
+                else:
+                    cfg = DrydenConfig.low_altitude(sc.altitude_m, 1.0, sc.airspeed_mps, sc.dt)
+                    cfg = DrydenConfig((rnd.turbulence_sigma_mps,) * 3, cfg.length_scale_m, sc.airspeed_mps, sc.dt)
+                    self.turbulence[i] = DrydenTurbulence(cfg, aircraft_seeds(turbulence_seed, v))
             self.cstate[i * v:(i + 1) * v] = self.fcs.initial_state(v)
             self.step_count[i] = 0
             self.induced[i] = 0.0
@@ -142,6 +156,9 @@ class FormationEpisode:
         self.sim.reset_wake_hold()
         self._update_demands(self._velocity_ned())
         self._demands_at = None
+        if self.frozen_field:
+            frozen_field_reset(self.field_params, self.field_state, idx, field_seeds)
+            self._sample_gusts()
 
     # ------------------------------------------------------------------ pieces
     @property
@@ -149,9 +166,66 @@ class FormationEpisode:
         return self.step_count * self.dt
 
     def ambient_wind(self) -> np.ndarray:
-        """(B, V, 3) ambient wind (scenario gusts + steady wind), NED m/s."""
+        """(B, V, 3) ambient wind at each UAV: scenario gusts + steady wind + the frozen turbulence
+        field's gust at its position, NED m/s (independent turbulence is in :meth:`turbulence_body`)."""
         w = self.scenario.ambient_wind_ned(self.time_s) + self.steady_wind
-        return np.broadcast_to(w[:, None, :], (self.batch_size, self.n_vehicles, 3)).copy()
+        return w[:, None, :] + self.gust_ned
+
+    def _sample_gusts(self) -> None:
+        """Read the frozen field at every UAV's current position (the formation's axes: vehicle 0's
+        demanded track)."""
+        vd0 = self.velocity_demand[:, 0]
+        track = np.arctan2(vd0[:, 1], vd0[:, 0])
+        frozen_field_sample(self.field_params, self.field_state, np.ascontiguousarray(self.state[..., 10:13]), track,
+                            self.gust_ned)
+        np.nan_to_num(self.gust_ned, copy=False)  # a diverged UAV's position must not poison the others
+
+    def _advance_turbulence(self) -> None:
+        if self.frozen_field:
+            frozen_field_advance(self.field_params, self.field_state)
+        for t in self.turbulence:
+            if t is not None:
+                t.step()
+
+    def turbulence_gust_ned(self) -> np.ndarray:
+        """(B, V, 3) the turbulence each UAV flies through now, NED m/s (frozen field or independent)."""
+        if self.frozen_field:
+            return self.gust_ned.copy()
+        out = np.zeros((self.batch_size, self.n_vehicles, 3))
+        if any(t is not None for t in self.turbulence):
+            from ..frames import dcm_body_to_ned_from_quaternion
+
+            with np.errstate(all="ignore"):
+                r_bn = dcm_body_to_ned_from_quaternion(self.state[..., 6:10])
+                out = np.einsum("bvij,bvj->bvi", r_bn, self.turbulence_body())
+        return np.nan_to_num(out)
+
+    def controller_state(self) -> np.ndarray:
+        """(B, V, 7) the PID's integrator and washout states (agents.fcs CSTATE_NAMES)."""
+        return self.cstate.reshape(self.batch_size, self.n_vehicles, -1)
+
+    def slot_schedule_features(self) -> np.ndarray:
+        """(B, V, 10) each follower's slot schedule as observed: offset now (spans, track frame), its
+        rate (slog 1 m/s), next keyframe's offset minus the current one (spans), time to the next
+        keyframe (min(t, 10 s) / 10, 1 when none is left). Vehicle 0: zeros and 1."""
+        b, v = self.batch_size, self.n_vehicles
+        out = np.zeros((b, v, 10))
+        out[..., 9] = 1.0
+        t = self.time_s.astype(float)
+        for j, slot in enumerate(self.scenario.slots):
+            off, rate = slot.offset_and_rate(t)
+            off = off + self.slot_jitter[:, j + 1]
+            times = np.array([k[0] for k in slot.keyframes])
+            offs = np.array([k[1] for k in slot.keyframes]) * slot.span_m
+            nxt = np.searchsorted(times, t, side="right")
+            has = nxt < len(times)
+            nxt_c = np.minimum(nxt, len(times) - 1)
+            next_off = np.where(has[:, None], offs[nxt_c] + self.slot_jitter[:, j + 1], off)
+            out[:, j + 1, 0:3] = off / slot.span_m
+            out[:, j + 1, 3:6] = np.sign(rate) * np.log1p(np.abs(rate))
+            out[:, j + 1, 6:9] = (next_off - off) / slot.span_m
+            out[:, j + 1, 9] = np.where(has, np.minimum(times[nxt_c] - t, 10.0) / 10.0, 1.0)
+        return out
 
     def turbulence_body(self) -> np.ndarray:
         out = np.zeros((self.batch_size, self.n_vehicles, 3))
@@ -227,9 +301,22 @@ class FormationEpisode:
                     for s in range(1, n_steps):
                         turb[s, i] = t.step()
                     t.step()
+            if self.frozen_field:
+                # The substeps run in one compiled call, so the field is read at the positions of the
+                # decision's start (the transport delays change by < 1 % of a step over 0.1 s), at each
+                # substep's time.
+                amb = amb.copy()
+                for s in range(n_steps):
+                    if s:
+                        frozen_field_advance(self.field_params, self.field_state)
+                        self._sample_gusts()
+                    amb[s] += self.gust_ned
+                frozen_field_advance(self.field_params, self.field_state)
             self.commands = target.mapped
             res, status_any, min_sep = self.sim.step_many(self.state, target.mapped, amb, turb)
             self._take(res, n_steps)
+            if self.frozen_field:
+                self._sample_gusts()
             return status_any, min_sep
         status_any = np.zeros((b, v), dtype=np.int64)
         min_sep = np.full(b, np.inf)
@@ -269,10 +356,10 @@ class FormationEpisode:
     def _advance(self, cmd: np.ndarray, amb: np.ndarray, turb: np.ndarray) -> None:
         self.commands = cmd
         res = self.sim.step(self.state, cmd, amb, turb)
-        for t in self.turbulence:
-            if t is not None:
-                t.step()
+        self._advance_turbulence()
         self._take(res, 1)
+        if self.frozen_field:
+            self._sample_gusts()
 
     def _take(self, res, n_steps: int) -> None:
         b = self.batch_size

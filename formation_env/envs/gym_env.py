@@ -11,6 +11,7 @@ formation_env/Gust-v0                    gust               the single UAV (uav_
 formation_env/Tracking-v0                tracking           the single UAV (uav_0)
 formation_env/Echelon-v0                 echelon            first follower (uav_1)
 formation_env/Vee-v0                     vee                first follower (uav_1)
+formation_env/CloseFormation-v0          close_formation    follower (uav_1)
 =======================================  =================  ==========================
 
 Keyword arguments of ``gymnasium.make`` go to :class:`~formation_env.envs.config.EnvConfig`
@@ -35,6 +36,7 @@ GYM_IDS = {
     "formation_env/Tracking-v0": ("tracking", 0),
     "formation_env/Echelon-v0": ("echelon", 1),
     "formation_env/Vee-v0": ("vee", 1),
+    "formation_env/CloseFormation-v0": ("close_formation", 1),
 }
 
 

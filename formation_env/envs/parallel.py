@@ -65,6 +65,8 @@ class FormationParallelEnv(ParallelEnv):
         else:
             self._obs_space = spaces.Box(-OBS_CLIP, OBS_CLIP, (observation_size(n),), dtype=np.float32)
         self._act_space = spaces.Box(-1.0, 1.0, (4,), dtype=np.float32)
+        # centralised critics: ``state()`` is every UAV's observation vector, concatenated in index order
+        self.state_space = spaces.Box(-OBS_CLIP, OBS_CLIP, (n * observation_size(n),), dtype=np.float32)
         self._entropy = np.random.SeedSequence()
         self._renderer = None
 

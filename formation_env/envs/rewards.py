@@ -9,7 +9,7 @@ import numpy as np
 
 from .config import RewardWeights
 
-__all__ = ["slot_error_m", "min_separation_m", "reward_terms"]
+__all__ = ["slot_error_m", "min_separation_m", "reward_terms", "huber"]
 
 
 def slot_error_m(state: np.ndarray, position_demand: np.ndarray) -> np.ndarray:
@@ -38,17 +38,38 @@ def _min_separation(state, out):
             out[b, i] = best
 
 
-def reward_terms(w: RewardWeights, error, previous_error, action, previous_action, saving, collided, crashed) -> dict:
-    """Reward components (B, V) and their sum under ``"total"``. Non-finite inputs count as a crash."""
+_ERROR_CAP_M = 5000.0
+
+
+def huber(x):
+    """h(x) = x^2 / 2 for |x| <= 1, |x| - 1/2 beyond: quadratic near zero, linear far, never flat."""
+    ax = np.abs(x)
+    return np.where(ax <= 1.0, 0.5 * ax * ax, ax - 0.5)
+
+
+def reward_terms(w: RewardWeights, error, previous_error, action, previous_action, saving, separation, collided,
+                 crashed, collision_separation_m: float, span_m: float) -> dict:
+    """Reward components (B, V) and their sum under ``"total"`` (see :class:`RewardWeights`).
+
+    error, previous_error: distance from the slot now and at the previous decision (m); separation:
+    distance to the nearest other UAV (m, inf alone). Non-finite inputs count as a crash: a diverged
+    UAV is treated as 5 km from its slot."""
     with np.errstate(all="ignore"):
-        err = np.where(np.isfinite(error), error, 1e6)  # a diverged UAV counts as far from its slot
-        prev = np.where(np.isfinite(previous_error), previous_error, 1e6)
+        # 5 km is beyond any distance a UAV can reach in an episode (25 m/s for minutes): the cap only
+        # bounds the reward of a diverged (non-finite) UAV, whose episode ends with the crash penalty
+        err = np.where(np.isfinite(error), np.minimum(error, _ERROR_CAP_M), _ERROR_CAP_M)
+        prev = np.where(np.isfinite(previous_error), np.minimum(previous_error, _ERROR_CAP_M), _ERROR_CAP_M)
+        cost, cost_prev = huber(err / w.slot_scale_m), huber(prev / w.slot_scale_m)
+        d_safe = w.barrier_separation_b * span_m
+        sep = np.where(np.isnan(separation), 0.0, separation)
+        depth = np.clip((d_safe - sep) / max(d_safe - collision_separation_m, 1e-9), 0.0, 1.0)
         terms = {
-            "slot": -w.slot * np.minimum(err / w.slot_scale_m, 5.0),
+            "slot": -w.slot * cost,
+            "progress": w.progress * (cost_prev - w.shaping_gamma * cost),  # gamma * Phi(s') - Phi(s), Phi = -cost
+            "separation": -w.separation * depth * depth,
             "effort": -w.effort * np.sum(action * action, axis=-1) / 4.0,
             "rate": -w.rate * np.sum((action - previous_action) ** 2, axis=-1) / 4.0,
             "benefit": w.benefit * np.where(np.isfinite(saving), saving, 0.0),
-            "progress": w.progress * np.clip((prev - err) / w.slot_scale_m, -1.0, 1.0),
             "collision": -w.collision * collided.astype(float),
             "crash": -w.crash * crashed.astype(float),
         }

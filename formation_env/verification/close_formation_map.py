@@ -1,0 +1,400 @@
+"""Induced-drag map of a two-ship Aerosonde formation and the close-formation optimum.
+
+The follower's induced-drag saving ``1 - D_i(formation) / D_i(alone)`` (ELL, Kutta-Joukowski
+loads: :func:`formation_env.wake.formation_benefit`) is mapped over follower slots. The vehicle
+model is the simulator's: :class:`formation_env.sim.FormationSimulator` builds the ELL model from
+its :class:`~formation_env.sim.formation.WakeConfig` (default: the Aerosonde's wing, nseg 10,
+Kurylowich core, control points, viscous AIC) and the wing origin from the aircraft data, and the
+ELL poses come from :func:`~formation_env.sim.formation.ell_state_from_aircraft`, exactly as the
+env's ``_saving`` does. Both aircraft fly the trim of ``trim(airspeed, altitude)`` (same attitude,
+still air); the leader flies north, so the leader's track frame (x forward, y starboard, z down;
+the scenarios' slot frame) is NED. Offsets are in spans (b = 2.9 m) between the aircraft's
+reference points (CGs), as the scenarios' slots are; with both at the same attitude the wing
+origins are offset by the same amount.
+
+Artefact at z = 0: ELL's wake is a discrete sheet of straight trailing legs (one per panel edge,
+0.1 b apart on the Aerosonde) in the leader's wing plane. When the follower's wing is in or near
+that plane its control points pass close to single legs and its saving ripples with the leg
+spacing (every 0.1 b; its peak passes 100 % on the plane, from a smooth 36 % at |z| = 0.1 b).
+The ripple is measured by :func:`ripple_profile` (the excess variation of the lateral saving profile over a
+single-peaked one) and :func:`exclusion_band` picks the smallest band |z| < z_ex outside which
+every lateral profile is single-peaked; :func:`find_optimum` searches only outside it. Outside the
+band the saving grows monotonically towards the sheet, so the optimum lies on the band's edge.
+
+``python -m formation_env.verification.close_formation_map [--figure PATH]`` rewrites the cached
+map (``formation_env/data/close_formation_map.json``) and, optionally, the figure.
+"""
+
+from __future__ import annotations
+
+import argparse
+import dataclasses
+import json
+from dataclasses import dataclass
+from functools import lru_cache
+from importlib import resources
+from pathlib import Path
+
+import numpy as np
+
+from ..io import atomic_write_json
+from ..scenarios.definitions import AEROSONDE_SPAN_M
+from ..sim.formation import WakeConfig
+
+__all__ = ["DEFAULT_X_B", "THESIS_SLOT_B", "DEFAULT_Z_EXCLUSION_B", "CACHE_PATH", "SavingMap", "Optimum",
+           "slot_savings", "saving_map", "ripple_profile", "exclusion_band", "find_optimum", "sensitivity",
+           "build_cache", "write_cache", "load_cache", "plot_map"]
+
+DEFAULT_X_B = -2.0
+THESIS_SLOT_B = (-2.0, 1.0, 0.3)  # section 6.5's formation-keeping slot
+DEFAULT_Z_EXCLUSION_B = 0.10  # chosen from the map: exclusion_band() at x = -2 b (see the cache)
+RIPPLE_Y_B = np.round(np.arange(0.0, 1.5 + 1e-9, 0.005), 6)  # lateral profile the ripple is measured on
+CACHE_PATH = Path(__file__).resolve().parents[1] / "data" / "close_formation_map.json"
+_SIDES = ("starboard", "port")
+_FD_STEP_B = 1e-6  # finite-difference step of the optimiser's gradient, spans
+
+
+@lru_cache(maxsize=8)
+def _setup(wake: WakeConfig, airspeed_mps: float, altitude_m: float):
+    """The simulator's two-ship ELL model and wing origin, and the trim state (built once)."""
+    from ..aircraft import trim
+    from ..sim.formation import FormationSimulator
+
+    if not wake.enabled:
+        raise ValueError("close_formation_map: the wake must be enabled")
+    sim = FormationSimulator(2, 1, wake=wake)
+    return sim.wake_model, sim.wing_origin_body, trim(airspeed_mps, altitude_m)
+
+
+def slot_savings(offsets_b, *, wake: WakeConfig = WakeConfig(), airspeed_mps: float = 25.0,
+                 altitude_m: float = 1000.0, span_m: float = AEROSONDE_SPAN_M, chunk: int = 2048) -> np.ndarray:
+    """Induced-drag saving of (leader, follower) with the follower at ``offsets_b``.
+
+    offsets_b (..., 3): follower slot relative to the leader in its track frame, spans. Returns
+    (..., 2): ``[..., 0]`` the leader's saving, ``[..., 1]`` the follower's. All slots are batched
+    ELL evaluations (``chunk`` at a time).
+    """
+    off = np.asarray(offsets_b, dtype=float)
+    if off.ndim < 1 or off.shape[-1] != 3 or not np.all(np.isfinite(off)):
+        raise ValueError(f"slot_savings: offsets_b must be finite with shape (..., 3), got shape {off.shape}")
+    from ..sim.formation import ell_state_from_aircraft
+    from ..wake import formation_benefit
+
+    model, wing_origin, tr = _setup(wake, float(airspeed_mps), float(altitude_m))
+    flat = off.reshape(-1, 3)
+    out = np.empty((flat.shape[0], 2))
+    for i in range(0, flat.shape[0], chunk):
+        part = flat[i:i + chunk]
+        state = np.repeat(tr.state[None], part.shape[0], axis=0).repeat(2, axis=1)  # (P, 2, 16)
+        state[:, 1, 10:13] += part * span_m
+        ell = ell_state_from_aircraft(state, np.zeros((part.shape[0], 2, 3)), wing_origin)
+        out[i:i + chunk] = formation_benefit(model, ell)["induced_drag_saving"]
+    return out.reshape(off.shape[:-1] + (2,))
+
+
+@dataclass(frozen=True)
+class SavingMap:
+    """Savings over a (y, z) grid of follower slots at one x; arrays (ny, nz)."""
+
+    x_b: float
+    y_b: np.ndarray
+    z_b: np.ndarray
+    follower: np.ndarray
+    leader: np.ndarray
+
+    def as_dict(self, decimals: int = 4) -> dict:
+        r = lambda a: np.round(np.asarray(a), decimals).tolist()  # noqa: E731
+        return {"x_b": self.x_b, "y_b": r(self.y_b), "z_b": r(self.z_b),
+                "follower_saving": r(self.follower), "leader_saving": r(self.leader)}
+
+    @classmethod
+    def from_dict(cls, d: dict) -> "SavingMap":
+        return cls(float(d["x_b"]), np.asarray(d["y_b"], float), np.asarray(d["z_b"], float),
+                   np.asarray(d["follower_saving"], float), np.asarray(d["leader_saving"], float))
+
+
+def saving_map(x_b: float = DEFAULT_X_B, y_b=None, z_b=None, **model_kw) -> SavingMap:
+    """Leader's and follower's saving with the follower over the grid ``y_b`` x ``z_b`` at ``x_b``
+    (spans; defaults: y -1.5..1.5 b and z -0.5..0.5 b, 0.1 b and 0.05 b steps). ``model_kw`` go to
+    :func:`slot_savings` (``wake``, ``airspeed_mps``, ``altitude_m``)."""
+    y = np.round(np.linspace(-1.5, 1.5, 31), 6) if y_b is None else np.atleast_1d(np.asarray(y_b, float))
+    z = np.round(np.linspace(-0.5, 0.5, 21), 6) if z_b is None else np.atleast_1d(np.asarray(z_b, float))
+    yy, zz = np.meshgrid(y, z, indexing="ij")
+    s = slot_savings(np.stack([np.full_like(yy, x_b), yy, zz], axis=-1), **model_kw)
+    return SavingMap(float(x_b), y, z, s[..., 1], s[..., 0])
+
+
+def ripple_profile(z_b, *, x_b: float = DEFAULT_X_B, y_b=RIPPLE_Y_B, **model_kw) -> dict:
+    """How far the follower's lateral saving profile at each height is from single-peaked.
+
+    For each z the saving s(y) over ``y_b`` gives ``excess_variation`` = total variation - (2 max
+    - s(first) - s(last)): zero when s rises to one peak and falls, the ripple's added up-and-down
+    otherwise; and ``n_local_maxima``. Returns arrays over ``z_b`` and the profiles' peaks.
+    """
+    z = np.atleast_1d(np.asarray(z_b, float))
+    m = saving_map(x_b, y_b, z, **model_kw)
+    s = m.follower  # (ny, nz)
+    tv = np.abs(np.diff(s, axis=0)).sum(axis=0)
+    excess = tv - (2 * s.max(axis=0) - s[0] - s[-1])
+    nmax = np.sum((s[1:-1] > s[:-2]) & (s[1:-1] > s[2:]), axis=0)
+    return {"z_b": z, "excess_variation": excess, "n_local_maxima": nmax,
+            "peak_saving": s.max(axis=0), "peak_y_b": m.y_b[np.argmax(s, axis=0)]}
+
+
+def exclusion_band(x_b: float = DEFAULT_X_B, *, z_step_b: float = 0.01, z_max_b: float = 0.3, tol: float = 1e-4,
+                   **ripple_kw) -> tuple[float, dict]:
+    """Smallest z_ex (a multiple of ``z_step_b``) such that the lateral profiles at every grid height
+    with z_ex <= |z| <= z_max_b, above and below the leader, ripple by at most ``tol``.
+    Returns ``(z_ex, ripple table over the signed heights)``."""
+    mags = np.round(np.arange(0.0, z_max_b + 1e-9, z_step_b), 6)
+    z = np.concatenate([-mags[::-1], mags[1:]])
+    rp = ripple_profile(z, x_b=x_b, **ripple_kw)
+    ex = rp["excess_variation"]
+    worst = np.maximum(ex[:mags.size][::-1], ex[mags.size - 1:])  # the worse side, by |z|
+    bad = np.nonzero(worst > tol)[0]
+    if bad.size and bad[-1] == mags.size - 1:
+        raise ValueError(f"exclusion_band: the profile still ripples at |z| = {z_max_b} b; raise z_max_b")
+    z_ex = float(mags[bad[-1] + 1]) if bad.size else 0.0
+    return z_ex, rp
+
+
+@dataclass(frozen=True)
+class Optimum:
+    """The best follower slot found outside the excluded band."""
+
+    offset_b: tuple  # (x, y, z) spans, leader's track frame
+    saving: float  # follower's induced-drag saving there
+    leader_saving: float
+    side: str
+    z_exclusion_b: float
+    on_band_edge: bool  # the optimum presses against |z| = z_exclusion_b
+    candidates: tuple  # ((offset_b, saving), ...): the refined best below and above the leader
+    n_evaluations: int  # follower slots evaluated
+    n_calls: int  # batched ELL calls
+
+    def as_dict(self) -> dict:
+        d = dataclasses.asdict(self)
+        d["offset_b"] = [round(v, 5) for v in self.offset_b]
+        d["saving"], d["leader_saving"] = round(self.saving, 5), round(self.leader_saving, 5)
+        d["candidates"] = [{"offset_b": [round(v, 5) for v in o], "saving": round(s, 5)} for o, s in self.candidates]
+        return d
+
+
+def find_optimum(x_b: float = DEFAULT_X_B, *, z_exclusion_b: float = DEFAULT_Z_EXCLUSION_B, side: str = "starboard",
+                 y_range_b: tuple = (0.5, 1.5), z_max_b: float = 0.5, grid_step_b: float = 0.05,
+                 **model_kw) -> Optimum:
+    """The follower slot at ``x_b`` with the largest induced-drag saving, |z| >= ``z_exclusion_b``.
+
+    ``y_range_b`` is the starboard lateral range (mirrored for ``side="port"``), ``z_max_b`` the
+    largest |z| searched. A grid (``grid_step_b``) over both half-planes (below and above the
+    leader) gives each half's best point, refined with a bounded L-BFGS-B; the better one wins.
+    """
+    from scipy.optimize import minimize
+
+    if side not in _SIDES:
+        raise ValueError(f"find_optimum: side must be one of {_SIDES}, got {side!r}")
+    if not 0.0 <= z_exclusion_b < z_max_b:
+        raise ValueError(f"find_optimum: need 0 <= z_exclusion_b < z_max_b, got {z_exclusion_b}, {z_max_b}")
+    lo, hi = sorted(float(v) for v in y_range_b)
+    if side == "port":
+        lo, hi = -hi, -lo
+    n_eval = n_calls = 0
+
+    def savings(y, z):
+        nonlocal n_eval, n_calls
+        y, z = np.broadcast_arrays(np.asarray(y, float), np.asarray(z, float))
+        n_eval += y.size
+        n_calls += 1
+        return slot_savings(np.stack([np.full(y.shape, float(x_b)), y, z], axis=-1), **model_kw)
+
+    ny = max(2, int(round((hi - lo) / grid_step_b)) + 1)
+    nz = max(2, int(round((z_max_b - z_exclusion_b) / grid_step_b)) + 1)
+    gy = np.linspace(lo, hi, ny)
+    found = []
+    for sign in (1.0, -1.0):  # below, above the leader
+        gz = sign * np.linspace(z_exclusion_b, z_max_b, nz)
+        yy, zz = np.meshgrid(gy, gz, indexing="ij")
+        s = savings(yy, zz)[..., 1]
+        k = np.unravel_index(np.argmax(s), s.shape)
+        zb = sorted((sign * z_exclusion_b, sign * z_max_b))
+
+        def neg_and_grad(p, zb=zb):  # value and forward-difference gradient in one batched call
+            hy, hz = (_FD_STEP_B if p[0] + _FD_STEP_B <= hi else -_FD_STEP_B,
+                      _FD_STEP_B if p[1] + _FD_STEP_B <= zb[1] else -_FD_STEP_B)
+            f = savings([p[0], p[0] + hy, p[0]], [p[1], p[1], p[1] + hz])[:, 1]
+            return -f[0], -np.array([(f[1] - f[0]) / hy, (f[2] - f[0]) / hz])
+
+        res = minimize(neg_and_grad, np.array([yy[k], zz[k]]), jac=True, method="L-BFGS-B",
+                       bounds=[(lo, hi), tuple(zb)], options={"ftol": 1e-10, "gtol": 1e-6})
+        best = (res.x, -res.fun) if -res.fun >= s[k] else (np.array([yy[k], zz[k]]), s[k])
+        found.append(((float(x_b), float(best[0][0]), float(best[0][1])), float(best[1])))
+    offset, saving = max(found, key=lambda c: c[1])
+    leader = float(savings(offset[1], offset[2])[0])
+    return Optimum(offset, saving, leader, side, float(z_exclusion_b),
+                   bool(abs(abs(offset[2]) - z_exclusion_b) < 1e-6), tuple(found), n_eval, n_calls)
+
+
+def sensitivity(offset_b, *, delta_b: float = 0.1, z_exclusion_b: float = DEFAULT_Z_EXCLUSION_B, **model_kw) -> dict:
+    """Follower saving with the slot moved by -/+ ``delta_b`` along x, y and z (each axis alone):
+    ``{axis: {"minus": s, "plus": s, "loss_minus": s0 - s, "loss_plus": ..., "minus_in_band": ...}}``
+    (a move into |z| < z_exclusion_b lands in the artefact band: its number is not trustworthy)."""
+    o = np.asarray(offset_b, float)
+    pts = [o]
+    for ax in range(3):
+        for sgn in (-1.0, 1.0):
+            p = o.copy()
+            p[ax] += sgn * delta_b
+            pts.append(p)
+    s = slot_savings(np.array(pts), **model_kw)[:, 1]
+    out = {"delta_b": delta_b, "saving": float(s[0])}
+    for ax, name in enumerate("xyz"):
+        sm, sp = float(s[1 + 2 * ax]), float(s[2 + 2 * ax])
+        out[name] = {"minus": sm, "plus": sp, "loss_minus": float(s[0] - sm), "loss_plus": float(s[0] - sp),
+                     "minus_in_band": bool(abs(pts[1 + 2 * ax][2]) < z_exclusion_b - 1e-9),
+                     "plus_in_band": bool(abs(pts[2 + 2 * ax][2]) < z_exclusion_b - 1e-9)}
+    return out
+
+
+def _r(v, d=5):
+    return np.round(np.asarray(v, float), d).tolist()
+
+
+def _round_tree(d, digits=5):
+    if isinstance(d, dict):
+        return {k: _round_tree(v, digits) for k, v in d.items()}
+    return round(d, digits) if isinstance(d, float) else d
+
+
+def build_cache(x_b: float = DEFAULT_X_B, *, y_b=None, z_b=None, wake: WakeConfig = WakeConfig(),
+                airspeed_mps: float = 25.0, altitude_m: float = 1000.0, slot_decimals: int = 2) -> dict:
+    """Everything the docs and tests read: the band (from the ripple), the optimum (both sides),
+    the thesis slot's saving, the sensitivity and a coarse map."""
+    kw = dict(wake=wake, airspeed_mps=airspeed_mps, altitude_m=altitude_m)
+    z_ex, rp = exclusion_band(x_b, **kw)
+    search = dict(y_range_b=[0.5, 1.5], z_max_b=0.5, grid_step_b=0.05)
+    opt = find_optimum(x_b, z_exclusion_b=z_ex, **search, **kw)
+    port = find_optimum(x_b, z_exclusion_b=z_ex, side="port", **search, **kw)
+    slot = tuple(round(v, slot_decimals) for v in opt.offset_b)
+    thesis = slot_savings(np.array(THESIS_SLOT_B), **kw)
+    slot_s = slot_savings(np.array(slot), **kw)
+    _, wing_origin, tr = _setup(wake, float(airspeed_mps), float(altitude_m))
+    return {
+        "_about": "Close-formation induced-drag map (formation_env.verification.close_formation_map). Offsets "
+                  "in spans b of the follower from the leader, leader's track frame (x forward, y starboard, "
+                  "z down); saving = 1 - D_i(formation)/D_i(alone) from ELL (Kutta-Joukowski loads).",
+        "parameters": {
+            "x_b": x_b, "span_m": AEROSONDE_SPAN_M, "airspeed_mps": airspeed_mps, "altitude_m": altitude_m,
+            "trim": {"alpha_rad": round(tr.alpha, 6), "theta_rad": round(tr.theta, 6), "psi_rad": round(tr.psi, 6)},
+            "wake": dataclasses.asdict(wake), "wing_origin_body_m": _r(wing_origin, 6),
+            "search": search, "ripple": {"y_b": [float(RIPPLE_Y_B[0]), float(RIPPLE_Y_B[-1]), 0.005],
+                                         "tol": 1e-4, "z_step_b": 0.01},
+        },
+        "z_exclusion_b": z_ex,
+        "ripple": {"z_b": _r(rp["z_b"], 3), "excess_variation": _r(rp["excess_variation"]),
+                   "n_local_maxima": np.asarray(rp["n_local_maxima"]).tolist(),
+                   "peak_saving": _r(rp["peak_saving"], 4), "peak_y_b": _r(rp["peak_y_b"], 3)},
+        "optimum": opt.as_dict(),
+        "optimum_port": port.as_dict(),
+        "scenario_slot_b": list(slot),
+        "scenario_slot_saving": round(float(slot_s[1]), 5),
+        "thesis_slot_b": list(THESIS_SLOT_B),
+        "thesis_slot_saving": round(float(thesis[1]), 5),
+        "thesis_slot_leader_saving": round(float(thesis[0]), 5),
+        "sensitivity": _round_tree(sensitivity(opt.offset_b, delta_b=0.1, z_exclusion_b=z_ex, **kw)),
+        "sensitivity_0p05": _round_tree(sensitivity(opt.offset_b, delta_b=0.05, z_exclusion_b=z_ex, **kw)),
+        "map": saving_map(x_b, y_b, z_b, **kw).as_dict(),
+    }
+
+
+def write_cache(path=CACHE_PATH, *, overwrite: bool = True, **build_kw) -> Path:
+    """Build the cache and write it atomically (``path`` default: the package's data file)."""
+    return atomic_write_json(path, build_cache(**build_kw), overwrite=overwrite)
+
+
+def load_cache(path=None) -> dict:
+    """The cached map (the package's data file unless ``path``)."""
+    if path is None:
+        return json.loads(resources.files("formation_env.data").joinpath("close_formation_map.json").read_text())
+    return json.loads(Path(path).read_text())
+
+
+def plot_map(path, cache: dict | None = None, *, y_b=None, z_b=None, overwrite: bool = True, **model_kw) -> Path:
+    """The figure of docs/close_formation.md: saving contours over (y, z) at the cache's x with the
+    optimum, its port mirror, the thesis slot and the excluded band; saving vs y at the optimum's z
+    and vs z at its y. The contours use a finer grid computed here (``y_b``, ``z_b``)."""
+    import matplotlib.pyplot as plt
+
+    from ..plotting import save_figure
+
+    c = load_cache() if cache is None else cache
+    x_b, z_ex = c["parameters"]["x_b"], c["z_exclusion_b"]
+    opt, port = c["optimum"]["offset_b"], c["optimum_port"]["offset_b"]
+    y = np.round(np.arange(-1.5, 1.5 + 1e-9, 0.02), 6) if y_b is None else np.asarray(y_b, float)
+    z = np.round(np.arange(-0.5, 0.5 + 1e-9, 0.01), 6) if z_b is None else np.asarray(z_b, float)
+    m = saving_map(x_b, y, z, **model_kw)
+    fig = plt.figure(figsize=(9.0, 6.6))
+    gs = fig.add_gridspec(2, 2, height_ratios=[1.25, 1.0])
+    ax = fig.add_subplot(gs[0, :])
+    levels = np.linspace(-0.6, 0.6, 25)
+    cf = ax.contourf(m.y_b, m.z_b, np.clip(m.follower.T, -0.6, 0.6), levels=levels, cmap="RdBu_r", extend="both")
+    in_band = np.broadcast_to(np.abs(m.z_b) < z_ex, m.follower.shape)
+    outside = np.ma.masked_where(in_band, m.follower).T  # no isolines in the band
+    cs = ax.contour(m.y_b, m.z_b, outside, levels=[0.15, 0.25, 0.30, 0.35], colors="k", linewidths=0.6)
+    ax.clabel(cs, fmt=lambda v: f"{100 * v:.0f} %", fontsize=7)
+    fig.colorbar(cf, ax=ax, label="follower induced-drag saving", ticks=np.linspace(-0.6, 0.6, 7))
+    ax.axhspan(-z_ex, z_ex, facecolor="none", edgecolor="0.3", hatch="///", linewidth=0.0)
+    ax.axhline(-z_ex, color="0.3", lw=0.8)
+    ax.axhline(z_ex, color="0.3", lw=0.8)
+    ax.plot(opt[1], opt[2], "*", ms=14, mfc="gold", mec="k", label=f"optimum ({opt[1]:.3f}, {opt[2]:.2f}) b: "
+            f"{100 * c['optimum']['saving']:.1f} %")
+    ax.plot(port[1], port[2], "*", ms=11, mfc="none", mec="k", label="port mirror")
+    ax.plot(THESIS_SLOT_B[1], THESIS_SLOT_B[2], "X", ms=10, mfc="w", mec="k",
+            label=f"thesis slot (1, 0.3) b: {100 * c['thesis_slot_saving']:.1f} %")
+    ax.plot([], [], " ", label=f"hatched: |z| < {z_ex:g} b excluded")
+    ax.set_xlabel("y / b (starboard)")
+    ax.set_ylabel("z / b (down)")
+    ax.invert_yaxis()
+    ax.set_title(f"follower at x = {x_b:g} b behind the leader (Aerosonde, ELL, trim 25 m/s)")
+    ax.legend(loc="upper center", fontsize=7.5, framealpha=0.9)
+    # line cuts through the optimum
+    yl = np.round(np.arange(0.0, 1.5 + 1e-9, 0.005), 6)
+    zl = np.round(np.arange(-0.4, 0.4 + 1e-9, 0.005), 6)
+    sy = slot_savings(np.stack([np.full_like(yl, x_b), yl, np.full_like(yl, opt[2])], -1), **model_kw)[:, 1]
+    s0 = slot_savings(np.stack([np.full_like(yl, x_b), yl, np.zeros_like(yl)], -1), **model_kw)[:, 1]
+    sz = slot_savings(np.stack([np.full_like(zl, x_b), np.full_like(zl, opt[1]), zl], -1), **model_kw)[:, 1]
+    a1 = fig.add_subplot(gs[1, 0])
+    a1.plot(yl, 100 * s0, color="0.65", lw=0.8, label="z = 0 (in the band)")
+    a1.plot(yl, 100 * sy, "C0", label=f"z = {opt[2]:.2f} b")
+    a1.axvline(opt[1], color="k", ls=":", lw=0.8)
+    a1.set_ylim(-60, 110)
+    a1.set_xlabel("y / b")
+    a1.set_ylabel("follower saving, %")
+    a1.legend(fontsize=7.5)
+    a1.grid(alpha=0.3)
+    a2 = fig.add_subplot(gs[1, 1])
+    inb = np.abs(zl) < z_ex
+    a2.plot(zl, np.where(inb, np.nan, 100 * sz), "C0", label=f"y = {opt[1]:.3f} b")
+    a2.plot(zl, np.where(inb, 100 * sz, np.nan), color="0.65", lw=0.8, label="excluded band")
+    a2.axvspan(-z_ex, z_ex, color="0.85", zorder=0)
+    a2.axvline(opt[2], color="k", ls=":", lw=0.8)
+    a2.set_xlabel("z / b (down)")
+    a2.legend(fontsize=7.5)
+    a2.grid(alpha=0.3)
+    fig.tight_layout()
+    return save_figure(fig, path, overwrite=overwrite, dpi=80)
+
+
+def main(argv=None) -> int:
+    p = argparse.ArgumentParser(description="Rewrite the cached close-formation map (and figure).")
+    p.add_argument("--cache", default=str(CACHE_PATH))
+    p.add_argument("--figure", default=None, help="also write the map figure here (PNG)")
+    a = p.parse_args(argv)
+    path = write_cache(a.cache)
+    print(f"wrote {path}")
+    if a.figure:
+        print(f"wrote {plot_map(a.figure, load_cache(a.cache))}")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

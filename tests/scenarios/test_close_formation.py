@@ -1,0 +1,110 @@
+"""The close_formation scenario: the ELL induced-drag optimum, its cached map and its Gym id."""
+
+import gymnasium as gym
+import numpy as np
+import pytest
+
+import formation_env  # noqa: F401  (registers the Gym ids)
+from formation_env.envs import GYM_IDS
+from formation_env.scenarios import get_scenario, scenario_names
+from formation_env.verification import close_formation_map as cfm
+
+
+@pytest.fixture(scope="module")
+def cache():
+    return cfm.load_cache()
+
+
+def _search(cache):
+    return {k: tuple(v) if isinstance(v, list) else v for k, v in cache["parameters"]["search"].items()}
+
+
+@pytest.fixture(scope="module")
+def optimum(cache):
+    return cfm.find_optimum(cache["parameters"]["x_b"], z_exclusion_b=cache["z_exclusion_b"], **_search(cache))
+
+
+def test_cache_is_small_and_matches_the_module_defaults(cache):
+    assert cfm.CACHE_PATH.stat().st_size < 100_000
+    assert cache["z_exclusion_b"] == cfm.DEFAULT_Z_EXCLUSION_B
+    assert cache["parameters"]["x_b"] == cfm.DEFAULT_X_B
+    assert cache["parameters"]["wake"]["tailplane"] is False  # the simulator's default ELL model
+    m = cfm.SavingMap.from_dict(cache["map"])
+    assert m.follower.shape == (m.y_b.size, m.z_b.size) == m.leader.shape
+
+
+def test_find_optimum_reproduces_the_cached_optimum(cache, optimum):
+    c = cache["optimum"]
+    np.testing.assert_allclose(optimum.offset_b, c["offset_b"], atol=2e-3)
+    assert optimum.saving == pytest.approx(c["saving"], abs=5e-4)
+    assert optimum.leader_saving == pytest.approx(c["leader_saving"], abs=5e-4)
+    # the cached coarse map agrees with a fresh evaluation at a few of its points
+    m = cfm.SavingMap.from_dict(cache["map"])
+    iy, iz = [0, 12, 25, 30], [3, 12, 19, 20]
+    fresh = cfm.slot_savings(np.stack([np.full(4, m.x_b), m.y_b[iy], m.z_b[iz]], -1))
+    np.testing.assert_allclose(fresh[:, 1], m.follower[iy, iz], atol=1e-4)
+    np.testing.assert_allclose(fresh[:, 0], m.leader[iy, iz], atol=1e-4)
+
+
+def test_the_optimum_beats_the_thesis_slot(cache, optimum):
+    thesis = cfm.slot_savings(np.array(cfm.THESIS_SLOT_B))[1]
+    assert thesis == pytest.approx(cache["thesis_slot_saving"], abs=1e-4)
+    assert optimum.saving >= 0.30
+    assert optimum.saving > thesis + 0.15
+    assert 0.9 < optimum.offset_b[1] < 1.0  # a little wing-tip overlap
+    # it is a maximum: a step of 0.05 b along y or away from the wake plane loses saving
+    x, y, z = optimum.offset_b
+    around = cfm.slot_savings(np.array([[x, y - 0.05, z], [x, y + 0.05, z], [x, y, z + 0.05]]))[:, 1]
+    assert np.all(around < optimum.saving)
+
+
+def test_port_and_starboard_optima_mirror(optimum):
+    port = cfm.find_optimum(z_exclusion_b=optimum.z_exclusion_b, side="port")
+    assert port.offset_b[1] == pytest.approx(-optimum.offset_b[1], abs=2e-3)
+    assert port.offset_b[2] == pytest.approx(optimum.offset_b[2], abs=1e-9)
+    assert port.saving == pytest.approx(optimum.saving, abs=1e-3)
+    # the map is mirror symmetric too (up to the trim's tiny heading, -0.0006 rad)
+    m = cfm.saving_map(-2.0, [-1.2, -0.96, -0.5, 0.5, 0.96, 1.2], [-0.3, 0.1, 0.25])
+    np.testing.assert_allclose(m.follower, m.follower[::-1], atol=1e-3)
+    np.testing.assert_allclose(m.leader, m.leader[::-1], atol=1e-3)
+
+
+def test_the_excluded_band_is_respected(cache, optimum):
+    z_ex = cache["z_exclusion_b"]
+    assert abs(optimum.offset_b[2]) >= z_ex - 1e-9 and optimum.on_band_edge
+    for _, z in [(o, o[2]) for o, _ in optimum.candidates]:
+        assert abs(z) >= z_ex - 1e-9
+    wider = cfm.find_optimum(z_exclusion_b=0.2, grid_step_b=0.1)
+    assert abs(wider.offset_b[2]) >= 0.2 - 1e-9
+    assert wider.saving < optimum.saving
+    # the band is where the discrete trailing legs make the lateral profile ripple; outside it
+    # every profile has one peak
+    rp = cfm.ripple_profile([-z_ex, -0.05, 0.0, 0.05, z_ex])
+    assert rp["excess_variation"][[0, 4]].max() <= cache["parameters"]["ripple"]["tol"]
+    assert np.all(rp["n_local_maxima"][[0, 4]] == 1)
+    assert rp["excess_variation"][1:4].min() > 0.1 and np.all(rp["n_local_maxima"][1:4] > 3)
+    assert rp["peak_saving"][2] > 0.9  # unphysical: near-zero induced drag on the vortex sheet
+    with pytest.raises(ValueError, match="z_exclusion_b"):
+        cfm.find_optimum(z_exclusion_b=0.6)
+    with pytest.raises(ValueError, match="side"):
+        cfm.find_optimum(side="left")
+
+
+def test_scenario_and_gym_id(cache):
+    assert "close_formation" in scenario_names()
+    sc = get_scenario("close_formation")
+    assert sc.n_vehicles == 2 and sc.duration_s == 60.0
+    slot = np.array(sc.slots[0].offset_and_rate(0.0)[0]) / sc.slots[0].span_m
+    np.testing.assert_allclose(slot, cache["scenario_slot_b"], atol=1e-12)
+    np.testing.assert_allclose(slot, cache["optimum"]["offset_b"], atol=0.005 + 1e-9)
+    assert "36 %" in sc.description and f"{100 * cache['scenario_slot_saving']:.0f} %" in sc.description
+    assert GYM_IDS["formation_env/CloseFormation-v0"] == ("close_formation", 1)
+    env = gym.make("formation_env/CloseFormation-v0", duration_s=1.0, action_mode="residual", compute_benefit=True)
+    obs, _ = env.reset(seed=0)
+    assert env.observation_space.contains(obs)
+    for _ in range(3):
+        obs, reward, term, trunc, info = env.step(np.zeros(4, np.float32))
+        assert np.isfinite(reward) and not term
+    # the env's own ELL saving (same model, same poses) starts at the map's value
+    assert info["induced_drag_saving"] == pytest.approx(cache["scenario_slot_saving"], abs=0.05)
+    env.close()
