@@ -3,7 +3,9 @@
 Flies the thesis scenarios with the thesis PID baseline (tracking, gust, formation keeping with
 and without the wake, reconfiguration) and writes their metrics and thesis-style figures; then
 reproduces the thesis tables (``verify``), the chapter 5.4 validation sweeps and the wake-field
-figures. Everything goes into a fresh output directory (never overwriting an existing one).
+figures; finally flies the committed ``close_formation`` RL policy beside the thesis PID and
+``pid_formation`` on a few held-out episodes under frozen turbulence (comparison table and figures).
+Everything goes into a fresh output directory (never overwriting an existing one).
 """
 
 from __future__ import annotations
@@ -15,6 +17,8 @@ from ..io import atomic_write_json, atomic_write_text, prepare_output_dir
 from . import verify
 
 DEMO_SCENARIOS = ("tracking", "gust", "formation_keeping", "reconfiguration")
+DEMO_POLICY_SCENARIO = "close_formation"
+DEMO_POLICY_EPISODES = 8
 
 
 def register(sub) -> None:
@@ -55,11 +59,38 @@ def run(args) -> int:
     save_figure(sweeps_figure(sweeps), out / "validation_sweeps.png", overwrite=ow)
     save_figure(trefftz_planes_figure(), out / "wake_trefftz_planes.png", overwrite=ow)
 
-    ok = all(verify._ok(d) for d in results.values()) and all(_completed(m) for m in scenario_summary.values())
+    policy_ok = _policy_comparison(out, ow)
+
+    ok = (all(verify._ok(d) for d in results.values()) and all(_completed(m) for m in scenario_summary.values())
+          and policy_ok)
     summary = {"verify_ok": ok, "files": sorted(p.name for p in out.iterdir())}
     print(f"\nwrote {out}/: {', '.join(summary['files'])}")
     print(json.dumps({"verify_ok": ok}))
     return 0 if ok else 1
+
+
+def _policy_comparison(out, overwrite: bool) -> bool:
+    """The committed close_formation policy (training seed 0) against the thesis PID and pid_formation
+    on the first held-out test episodes (frozen Dryden turbulence sigma 1 m/s, wake on)."""
+    from pathlib import Path
+
+    policies = sorted((Path(__file__).resolve().parents[2] / "train" / "policies").glob(f"{DEMO_POLICY_SCENARIO}_*seed0.zip"))
+    if not policies:
+        print(f"no committed {DEMO_POLICY_SCENARIO} policy: skipping the policy comparison")
+        return True
+    try:
+        from train.evaluate import evaluate
+    except ModuleNotFoundError as exc:  # the RL extra is not installed
+        print(f"policy comparison skipped ({exc}); install with pip install -e '.[rl]'")
+        return True
+    print(f"\nflying {DEMO_POLICY_SCENARIO}: {policies[0].name} vs the thesis PID vs pid_formation "
+          f"({DEMO_POLICY_EPISODES} held-out episodes, frozen turbulence sigma 1 m/s, wake on) ...", flush=True)
+    rep = evaluate([str(policies[0]), "pid", "pid_formation"], scenario=DEMO_POLICY_SCENARIO,
+                   episodes=DEMO_POLICY_EPISODES, out_dir=out / "policy_comparison", overwrite=overwrite, n_boot=2000)
+    print(rep["table_markdown"])
+    if rep.get("comparison_markdown"):
+        print(rep["comparison_markdown"])
+    return all(p["summary"]["episodes"] == DEMO_POLICY_EPISODES for p in rep["policies"].values())
 
 
 def _completed(metrics: dict) -> bool:

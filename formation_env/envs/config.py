@@ -33,7 +33,11 @@ class RewardWeights:
             - separation * ((d_safe - d) / (d_safe - d_coll))^2   for d < d_safe        barrier before a collision
             - effort * |a|^2 / 4 - rate * |a - a_prev|^2 / 4
             + benefit * induced-drag saving
-            - collision * [collision] - crash * [left the envelope or non-finite]
+            - (collision + F) * [collision] - (crash + F) * [left the envelope or non-finite]
+
+    F = slot * h(min(e_prev, 100 m) / slot_scale_m) * (decisions left until the time limit): ending the
+    episode forfeits the slot costs still to come, so a collision or crash must charge them, or ending
+    early would pay (the episode is never cheaper to end than to fly on at the current error).
 
     d_safe = ``barrier_separation_b`` spans, d_coll = the env's ``collision_separation_b`` spans. The slot
     term never saturates: it keeps decreasing with the error however far the UAV drifts. The shaping

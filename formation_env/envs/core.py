@@ -94,7 +94,8 @@ class FormationCore:
             separation = min_separation_m(eng.state)
         terms = reward_terms(self.config.reward, error, self.previous_error, act, self.previous_action, saving,
                              separation, np.broadcast_to(collided[:, None], error.shape), crashed,
-                             self.config.collision_separation_b * AEROSONDE_SPAN_M, AEROSONDE_SPAN_M)
+                             self.config.collision_separation_b * AEROSONDE_SPAN_M, AEROSONDE_SPAN_M,
+                             remaining_decisions=np.maximum(eng.n_steps - eng.step_count, 0) / self.substeps)
         self.previous_error = error
         self.previous_action = act
         self.last_terms, self.last_saving = terms, saving

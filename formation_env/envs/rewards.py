@@ -39,6 +39,7 @@ def _min_separation(state, out):
 
 
 _ERROR_CAP_M = 5000.0
+_TERMINAL_ERROR_CAP_M = 100.0
 
 
 def huber(x):
@@ -48,12 +49,17 @@ def huber(x):
 
 
 def reward_terms(w: RewardWeights, error, previous_error, action, previous_action, saving, separation, collided,
-                 crashed, collision_separation_m: float, span_m: float) -> dict:
+                 crashed, collision_separation_m: float, span_m: float, remaining_decisions=0) -> dict:
     """Reward components (B, V) and their sum under ``"total"`` (see :class:`RewardWeights`).
 
     error, previous_error: distance from the slot now and at the previous decision (m); separation:
-    distance to the nearest other UAV (m, inf alone). Non-finite inputs count as a crash: a diverged
-    UAV is treated as 5 km from its slot."""
+    distance to the nearest other UAV (m, inf alone); remaining_decisions (B,): decisions left until
+    the time limit. Non-finite inputs count as a crash: a diverged UAV is treated as 5 km from its slot.
+
+    A collision or crash ends the episode, which would also end the slot costs still to come: with
+    costs per decision, ending early could pay. So the terminal penalty also charges the slot cost
+    at the error the UAV had before the end (at most 100 m) for every decision left: ending an
+    episode is never cheaper than flying on where the UAV is."""
     with np.errstate(all="ignore"):
         # 5 km is beyond any distance a UAV can reach in an episode (25 m/s for minutes): the cap only
         # bounds the reward of a diverged (non-finite) UAV, whose episode ends with the crash penalty
@@ -63,6 +69,9 @@ def reward_terms(w: RewardWeights, error, previous_error, action, previous_actio
         d_safe = w.barrier_separation_b * span_m
         sep = np.where(np.isnan(separation), 0.0, separation)
         depth = np.clip((d_safe - sep) / max(d_safe - collision_separation_m, 1e-9), 0.0, 1.0)
+        remaining = np.asarray(remaining_decisions, dtype=float)
+        remaining = remaining[:, None] if remaining.ndim == 1 else remaining
+        forfeit = w.slot * huber(np.minimum(prev, _TERMINAL_ERROR_CAP_M) / w.slot_scale_m) * remaining
         terms = {
             "slot": -w.slot * cost,
             "progress": w.progress * (cost_prev - w.shaping_gamma * cost),  # gamma * Phi(s') - Phi(s), Phi = -cost
@@ -70,8 +79,8 @@ def reward_terms(w: RewardWeights, error, previous_error, action, previous_actio
             "effort": -w.effort * np.sum(action * action, axis=-1) / 4.0,
             "rate": -w.rate * np.sum((action - previous_action) ** 2, axis=-1) / 4.0,
             "benefit": w.benefit * np.where(np.isfinite(saving), saving, 0.0),
-            "collision": -w.collision * collided.astype(float),
-            "crash": -w.crash * crashed.astype(float),
+            "collision": -(w.collision + forfeit) * collided.astype(float),
+            "crash": -(w.crash + forfeit) * crashed.astype(float),
         }
     terms["total"] = sum(terms.values())
     return terms

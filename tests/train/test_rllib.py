@@ -132,7 +132,7 @@ def test_rllib_trains_checkpoints_restores_and_evaluates_on_loopback_ray(tmp_pat
     assert not np.array_equal(a2, a3)
 
     # RLlib-, SB3- and PID-flown episodes in one table.
-    sb3 = REPO / "train" / "policies" / "formation_keeping_ppo_residual.zip"
+    sb3 = sorted((REPO / "train" / "policies").glob("formation_keeping_*.zip"))[0]
     out = tmp_path / "eval"
     r = _cli(["evaluate", "--scenario", "formation_keeping", "--policy", str(run), "--policy", str(sb3),
               "--policy", "pid", "--episodes", "2", "--duration", "3", "--no-plots", "--out", str(out)],
