@@ -1,0 +1,38 @@
+#!/usr/bin/env bash
+# The exact commands behind the committed policies in train/policies/ (issue 13): PPO, setpoints actions,
+# frozen Dryden turbulence sigma 1 m/s, wake on, 3 training seeds per task, run two at a time on the
+# 2-core machine (one core each: NUMBA_NUM_THREADS=1, torch on 1 thread), then published with their
+# curves and validation history. Usage: bash train/committed_runs.sh [RUNS_DIR]
+set -euo pipefail
+cd "$(dirname "$0")/.."
+RUNS=${1:-runs/committed}
+FE=${FE:-.venv/bin/formation-env}
+PY=${PY:-.venv/bin/python}
+mkdir -p "$RUNS"
+
+jobs_list() {
+  for seed in 0 1 2; do
+    echo "formation_keeping 1200000 $seed"
+    echo "close_formation 1200000 $seed"
+    echo "reconfiguration 2500000 $seed"
+  done
+}
+
+run_one() {
+  local scenario=$1 steps=$2 seed=$3
+  local out="$RUNS/${scenario}_seed${seed}"
+  NUMBA_NUM_THREADS=1 "$FE" train --scenario "$scenario" --algo ppo --action-mode setpoints --steps "$steps" \
+    --seed "$seed" --out "$out" --no-progress-bar > "$RUNS/${scenario}_seed${seed}.log" 2>&1
+}
+export -f run_one
+export RUNS FE
+
+jobs_list | xargs -P 2 -L 1 bash -c 'run_one "$0" "$1" "$2"'
+
+for scenario in formation_keeping close_formation reconfiguration; do
+  for seed in 0 1 2; do
+    run="$RUNS/${scenario}_seed${seed}"
+    wall=$("$PY" -c "import json,sys; print(json.load(open(sys.argv[1]))['wall_s'])" "$run/summary.json")
+    "$PY" -m train.publish "$run" "${scenario}_ppo_setpoints_seed${seed}" --wall-s "$wall"
+  done
+done
