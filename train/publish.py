@@ -51,6 +51,33 @@ def publish(run_dir: str | Path, name: str, *, eval_json: str | Path | None = No
     return POLICIES / f"{name}.zip"
 
 
+def slim_evaluation(report: dict) -> dict:
+    """An evaluation report without the per-decision series (per-episode scalar metrics, summaries,
+    paired comparisons and seed groups are kept: enough to recompute every interval)."""
+    out = {k: v for k, v in report.items() if k not in ("policies", "plots", "out_dir")}
+    out["policies"] = {}
+    for name, r in report["policies"].items():
+        eps = [{k: v for k, v in e.items() if k != "series"} for e in r["episodes"]]
+        out["policies"][name] = {**{k: v for k, v in r.items() if k != "episodes"}, "episodes": eps}
+    return out
+
+
+def attach_evaluation(names: list[str], eval_json: str | Path, record: str | Path) -> None:
+    """Write the slim held-out evaluation to ``record`` (a new file) and put each policy's summary and
+    its paired comparisons into ``NAME.json`` (the metadata is updated in place, atomically)."""
+    rep = json.loads(Path(eval_json).read_text())
+    slim = slim_evaluation(rep)
+    atomic_write_json(record, slim)
+    for name in names:
+        meta_path = POLICIES / f"{name}.json"
+        meta = json.loads(meta_path.read_text())
+        meta["evaluation"] = {"record": Path(record).name, "seeds": [rep["seeds"][0], rep["seeds"][-1]],
+                              "episodes": len(rep["seeds"]), "turbulence_sigma_mps": rep["turbulence_sigma_mps"],
+                              "wake": rep["wake"], "summary": rep["policies"][name]["summary"],
+                              "comparisons": rep.get("comparisons", {}).get(name)}
+        atomic_write_json(meta_path, meta, overwrite=True)
+
+
 def main() -> None:
     ap = argparse.ArgumentParser()
     ap.add_argument("run_dir")
@@ -94,11 +121,41 @@ def plot_curves(names: list[str], out: str | Path, *, pid_validation: dict | Non
     a1.set_xlabel("environment steps")
     a1.set_ylabel(f"training episode return (mean per {bin_steps // 1000}k steps)")
     a2.set_xlabel("environment steps")
-    a2.set_ylabel("validation RMS slot error (m), 8 held-out episodes")
+    a2.set_ylabel("validation RMS slot error (m), 32 held-out episodes")
     for a in (a1, a2):
         a.grid(True, alpha=0.3)
         a.legend(fontsize=8)
     fig.tight_layout()
     path = atomic_write(out, lambda p: fig.savefig(p, dpi=100, format="png"))
+    plt.close(fig)
+    return path
+
+
+def plot_validation_curves(groups: dict[str, list[str]], out: str | Path, *, baselines: dict | None = None) -> Path:
+    """One panel per task: the validation RMS slot error (32 held-out episodes, model selection) of
+    each training seed against steps, with the baselines' RMS on the same episodes as lines
+    (``baselines``: {task: {baseline name: RMS m}})."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, axes = plt.subplots(1, len(groups), figsize=(4.2 * len(groups), 3.6), squeeze=False)
+    for ax, (task, names) in zip(axes[0], groups.items()):
+        for i, name in enumerate(names):
+            ev = json.loads((POLICIES / f"{name}_evaluations.json").read_text())
+            steps = [e["num_timesteps"] / 1e6 for e in ev]
+            ax.plot(steps, [e["rms_slot_error_m"] for e in ev], "o-", ms=3, color=f"C{i}",
+                    label=f"PPO seed {name.rsplit('seed', 1)[-1]}")
+        for j, (bname, value) in enumerate((baselines or {}).get(task, {}).items()):
+            ax.axhline(value, color=("k", "0.5")[j % 2], ls=("--", ":")[j % 2], label=bname)
+        ax.set_yscale("log")
+        ax.set_title(task, fontsize=10)
+        ax.set_xlabel("environment steps (millions)")
+        ax.grid(True, which="both", alpha=0.3)
+        ax.legend(fontsize=7)
+    axes[0][0].set_ylabel("validation RMS slot error (m)")
+    fig.tight_layout()
+    path = atomic_write(out, lambda p: fig.savefig(p, dpi=100, format="png"), overwrite=True)
     plt.close(fig)
     return path
