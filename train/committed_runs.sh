@@ -17,6 +17,13 @@ jobs_list() {
     echo "reconfiguration 2500000 $seed"
   done
 }
+# ONLY="scenario:seed scenario:seed ..." runs a subset (e.g. to redo one run)
+selected() {
+  if [ -z "${ONLY:-}" ]; then cat; return; fi
+  while read -r scenario steps seed; do
+    case " $ONLY " in *" $scenario:$seed "*) echo "$scenario $steps $seed" ;; esac
+  done
+}
 
 run_one() {
   local scenario=$1 steps=$2 seed=$3
@@ -27,7 +34,8 @@ run_one() {
 export -f run_one
 export RUNS FE
 
-jobs_list | xargs -P 2 -L 1 bash -c 'run_one "$0" "$1" "$2"'
+jobs_list | selected | xargs -P 2 -L 1 bash -c 'run_one "$0" "$1" "$2"'
+[ -n "${NO_PUBLISH:-}" ] && exit 0
 
 for scenario in formation_keeping close_formation reconfiguration; do
   for seed in 0 1 2; do

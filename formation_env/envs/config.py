@@ -35,9 +35,10 @@ class RewardWeights:
             + benefit * induced-drag saving
             - (collision + F) * [collision] - (crash + F) * [left the envelope or non-finite]
 
-    F = slot * h(min(e_prev, 100 m) / slot_scale_m) * (decisions left until the time limit): ending the
-    episode forfeits the slot costs still to come, so a collision or crash must charge them, or ending
-    early would pay (the episode is never cheaper to end than to fly on at the current error).
+    F = terminal_forfeit * slot * h(min(e_prev, 100 m) / slot_scale_m) * (decisions left until the time
+    limit): ending the episode forfeits the slot costs still to come, so a collision or crash must charge
+    them, or ending early would pay (with terminal_forfeit = 1 the episode is never cheaper to end than to
+    fly on at the current error).
 
     d_safe = ``barrier_separation_b`` spans, d_coll = the env's ``collision_separation_b`` spans. The slot
     term never saturates: it keeps decreasing with the error however far the UAV drifts. The shaping
@@ -51,6 +52,7 @@ class RewardWeights:
     benefit: float = 0.0
     progress: float = 1.0
     shaping_gamma: float = 0.995
+    terminal_forfeit: float = 1.0
     separation: float = 5.0
     barrier_separation_b: float = 1.2
     collision: float = 50.0

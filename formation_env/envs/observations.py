@@ -3,7 +3,7 @@
 Quantities that grow without bound during an episode (position, velocity and wind errors, distances
 to neighbours, controller integrators) are *signed-log* scaled, ``slog(x, s) = sign(x) ln(1 + |x| / s)``:
 linear (x / s) near zero, so small errors keep their resolution, and logarithmic far out, so a
-UAV 300 m from its slot (slog = 4.1 at s = 1 m) is still distinguished from one 30 m away (3.4)
+UAV 300 m from its slot (slog = 5.7 at s = 1 m) is still distinguished from one 30 m away (3.4)
 instead of saturating. Bounded quantities are divided by a scale. Every value is finally clipped to
 [-OBS_CLIP, OBS_CLIP] (10: e^10 s, ~22 km for s = 1 m, far beyond any reachable error); a non-finite
 value (only possible when the episode is ending because the aircraft diverged) is replaced by 0.

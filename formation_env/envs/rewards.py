@@ -71,7 +71,7 @@ def reward_terms(w: RewardWeights, error, previous_error, action, previous_actio
         depth = np.clip((d_safe - sep) / max(d_safe - collision_separation_m, 1e-9), 0.0, 1.0)
         remaining = np.asarray(remaining_decisions, dtype=float)
         remaining = remaining[:, None] if remaining.ndim == 1 else remaining
-        forfeit = w.slot * huber(np.minimum(prev, _TERMINAL_ERROR_CAP_M) / w.slot_scale_m) * remaining
+        forfeit = w.terminal_forfeit * w.slot * huber(np.minimum(prev, _TERMINAL_ERROR_CAP_M) / w.slot_scale_m) * remaining
         terms = {
             "slot": -w.slot * cost,
             "progress": w.progress * (cost_prev - w.shaping_gamma * cost),  # gamma * Phi(s') - Phi(s), Phi = -cost
