@@ -170,14 +170,15 @@ def load_policy(spec: str, *, action_mode: str | None = None, name: str | None =
 
 
 def eval_env_config(scenario: str, action_mode: str, *, turbulence_sigma_mps: float = 1.0, wake: bool = True,
-                    control_hz: float = 10.0, compute_benefit: bool = False, duration_s: float | None = None):
+                    control_hz: float = 10.0, compute_benefit: bool = False, duration_s: float | None = None,
+                    turbulence_field: str = "frozen"):
     """The evaluation episodes' EnvConfig: the thesis scenario with wake and Dryden turbulence on. With
     its defaults (sigma 1 m/s, wake on, the scenario's duration, no other randomisation) it is the test
     set's distribution, which the training's validation (model selection) also uses."""
     from formation_env.envs.config import EnvConfig, Randomisation
 
     return EnvConfig(scenario=scenario, learning="followers", action_mode=action_mode, wake=wake, control_hz=control_hz,
-                     compute_benefit=compute_benefit, duration_s=duration_s,
+                     compute_benefit=compute_benefit, duration_s=duration_s, turbulence_field=turbulence_field,
                      randomisation=Randomisation(turbulence_sigma_mps=turbulence_sigma_mps))
 
 
@@ -605,6 +606,7 @@ def evaluate(policies: Sequence[str], *, scenario: str, episodes: int = TEST_EPI
              turbulence_sigma_mps: float = 1.0, wake: bool = True, compute_benefit: bool = False,
              action_mode: str | None = None, out_dir: str | Path | None = None, overwrite: bool = False,
              plots: bool = True, duration_s: float | None = None, groups: dict[str, Sequence[str]] | None = None,
+             turbulence_field: str = "frozen",
              n_boot: int = N_BOOT, log: Callable[[str], None] | None = None) -> dict:
     """Evaluate ``policies`` ("pid", "pid_formation", SB3 zips or RLlib checkpoints) on the same held-out
     episodes (``episodes`` seeds from ``TEST_SEED_BASE``, or from ``seeds[0]``, or exactly ``seeds`` when
@@ -663,6 +665,7 @@ def evaluate(policies: Sequence[str], *, scenario: str, episodes: int = TEST_EPI
     results = {}
     for pol in loaded:
         cfg = eval_env_config(scenario, pol.action_mode, turbulence_sigma_mps=turbulence_sigma_mps, wake=wake,
+                              turbulence_field=turbulence_field,
                               control_hz=pol.control_hz, compute_benefit=compute_benefit, duration_s=duration_s)
         t0 = time.perf_counter()
         eps = run_episodes(pol.act, cfg, seeds, keep_series=True, reset=pol.reset)
@@ -682,7 +685,7 @@ def evaluate(policies: Sequence[str], *, scenario: str, episodes: int = TEST_EPI
     base_eps = {b: episodes_by_name[b] for b in baselines.values()}
     group_reports = {g: group_report({m: results[m] for m in members}, base_eps, n_boot=n_boot)
                      for g, members in group_spec.items()}
-    report = {"scenario": scenario, "seeds": seeds, "wake": wake, "turbulence_sigma_mps": turbulence_sigma_mps,
+    report = {"scenario": scenario, "seeds": seeds, "wake": wake, "turbulence_sigma_mps": turbulence_sigma_mps, "turbulence_field": turbulence_field,
               "policies": {n: {k: v for k, v in r.items()} for n, r in results.items()},
               "baselines": baselines, "comparisons": comps, "groups": group_reports,
               "statistics": {"confidence": 0.95, "n_boot": n_boot, "bootstrap_seed": 0,

@@ -39,6 +39,8 @@ def register(sub) -> None:
                    help=f"one seed (the first of --episodes consecutive ones) or one per episode "
                         f"(default {TEST_SEED_BASE}.., never used in training)")
     p.add_argument("--turbulence", type=_nonneg_float, default=1.0, help="Dryden sigma, m/s, every axis (default 1)")
+    p.add_argument("--turbulence-field", default="frozen", choices=("frozen", "independent"),
+                   help="one frozen field per formation (default) or independent Dryden streams per UAV")
     p.add_argument("--no-wake", action="store_true", help="switch the ELL wake off (default on)")
     p.add_argument("--benefit", action="store_true", help="also compute the ELL induced-drag saving (slow)")
     p.add_argument("--action-mode", default=None, choices=ACTION_MODES,
@@ -66,7 +68,7 @@ def run(args) -> int:
     rep = evaluate(args.policy, scenario=args.scenario, episodes=args.episodes, seeds=args.seeds,
                    turbulence_sigma_mps=args.turbulence, wake=not args.no_wake, compute_benefit=args.benefit,
                    action_mode=args.action_mode, out_dir=out, overwrite=args.overwrite, plots=not args.no_plots,
-                   duration_s=args.duration, log=print)
+                   duration_s=args.duration, turbulence_field=args.turbulence_field, log=print)
     print(rep["table_markdown"])
     if rep["comparison_markdown"]:
         print("paired comparisons (per-episode RMS slot error, reduction = baseline - policy):\n"
