@@ -685,7 +685,8 @@ def evaluate(policies: Sequence[str], *, scenario: str, episodes: int = TEST_EPI
     base_eps = {b: episodes_by_name[b] for b in baselines.values()}
     group_reports = {g: group_report({m: results[m] for m in members}, base_eps, n_boot=n_boot)
                      for g, members in group_spec.items()}
-    report = {"scenario": scenario, "seeds": seeds, "wake": wake, "turbulence_sigma_mps": turbulence_sigma_mps, "turbulence_field": turbulence_field,
+    report = {"scenario": scenario, "seeds": seeds, "wake": wake, "turbulence_sigma_mps": turbulence_sigma_mps,
+              "turbulence_field": turbulence_field,
               "policies": {n: {k: v for k, v in r.items()} for n, r in results.items()},
               "baselines": baselines, "comparisons": comps, "groups": group_reports,
               "statistics": {"confidence": 0.95, "n_boot": n_boot, "bootstrap_seed": 0,
