@@ -584,11 +584,16 @@ def _plots(out_dir: Path, results: dict[str, dict], scenario: str, *, overwrite:
     fig, ax = plt.subplots(figsize=(8, 4))
     for i, n in enumerate(names):
         eps = results[n]["episodes"]
-        length = min(len(e["series"]["t"]) for e in eps)
-        t = np.asarray(eps[0]["series"]["t"][:length])
-        e = np.array([ep["series"]["slot_error_m"][:length] for ep in eps])
-        mean, lo, hi = e.mean(0), np.percentile(e, 10, axis=0), np.percentile(e, 90, axis=0)
-        ax.plot(t, mean, color=f"C{i}", label=f"{n} (mean, 10-90 %)")
+        # episodes that ended early (collision, crash) leave the statistics from then on (NaN padding),
+        # so one early end does not cut every curve
+        longest = max(eps, key=lambda ep: len(ep["series"]["t"]))
+        t = np.asarray(longest["series"]["t"])
+        e = np.full((len(eps), len(t)), np.nan)
+        for k, ep in enumerate(eps):
+            e[k, :len(ep["series"]["slot_error_m"])] = ep["series"]["slot_error_m"]
+        mean, lo, hi = np.nanmean(e, 0), np.nanpercentile(e, 10, axis=0), np.nanpercentile(e, 90, axis=0)
+        ended = int(np.sum(np.isnan(e[:, -1])))
+        ax.plot(t, mean, color=f"C{i}", label=f"{n} (mean, 10-90 %)" + (f", {ended} ended early" if ended else ""))
         ax.fill_between(t, lo, hi, color=f"C{i}", alpha=0.2)
     ax.set_xlabel("time (s)")
     ax.set_ylabel("slot error (m)")
