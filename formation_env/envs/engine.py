@@ -176,9 +176,13 @@ class FormationEpisode:
         demanded track)."""
         vd0 = self.velocity_demand[:, 0]
         track = np.arctan2(vd0[:, 1], vd0[:, 0])
-        frozen_field_sample(self.field_params, self.field_state, np.ascontiguousarray(self.state[..., 10:13]), track,
-                            self.gust_ned)
-        np.nan_to_num(self.gust_ned, copy=False)  # a diverged UAV's position must not poison the others
+        # A diverged UAV (its formation's episode is ending) must neither stop the batch nor poison the
+        # others: non-finite positions and tracks are read as 0, and its gust is discarded with the episode.
+        pos = self.state[..., 10:13]
+        pos = np.ascontiguousarray(np.where(np.isfinite(pos), pos, 0.0))
+        track = np.where(np.isfinite(track), track, 0.0)
+        frozen_field_sample(self.field_params, self.field_state, pos, track, self.gust_ned)
+        np.nan_to_num(self.gust_ned, copy=False)
 
     def _advance_turbulence(self) -> None:
         if self.frozen_field:

@@ -195,3 +195,16 @@ def test_ending_the_episode_never_pays():
     stay = -w.slot * huber(30.0 / w.slot_scale_m)
     assert hit["collision"][0, 0] == pytest.approx(-(w.collision + 300 * w.slot * huber(30.0 / w.slot_scale_m)))
     assert hit["collision"][0, 0] < 300 * stay
+
+
+def test_a_diverged_uav_does_not_break_the_frozen_field():
+    """The field is read after every physics step; a UAV whose state went non-finite in that step (its
+    episode ends on that step's envelope status) must not raise or poison the other formations."""
+    env = formation_env.parallel_env("formation_keeping", action_mode="setpoints", learning="followers",
+                                     randomisation=Randomisation(turbulence_sigma_mps=1.0))
+    env.reset(seed=0)
+    eng = env.engine
+    eng.state[0, 1, 10:13] = np.nan  # as if the follower had diverged in the last physics step
+    eng._sample_gusts()
+    assert np.all(np.isfinite(eng.gust_ned)) and np.all(np.isfinite(eng.turbulence_gust_ned()))
+    assert np.all(np.isfinite(env.core.observations()))
