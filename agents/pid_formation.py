@@ -37,7 +37,8 @@ from dataclasses import dataclass, fields
 import numpy as np
 
 from formation_env.envs.actions import SETPOINT_POSITION_SCALE_M, SETPOINT_SPEED_SCALE_MPS
-from formation_env.envs.observations import (POSITION_SCALE_M, VELOCITY_SCALE_MPS, WIND_SCALE_MPS, group_sizes)
+from formation_env.envs.observations import (POSITION_SCALE_M, VELOCITY_SCALE_MPS, WIND_SCALE_MPS, observation_size,
+                                             to_dict)
 
 __all__ = ["PIDFormationGains", "PIDFormation", "inverse_slog"]
 
@@ -70,15 +71,6 @@ class PIDFormationGains:
                 raise ValueError(f"PIDFormationGains.{f.name} must be a finite number >= 0, got {v!r}")
 
 
-def _offsets(n_vehicles: int) -> dict[str, int]:
-    out, k = {}, 0
-    for name, size in group_sizes(n_vehicles).items():
-        out[name] = k
-        k += size
-    out["_size"] = k
-    return out
-
-
 class PIDFormation:
     """Batched, stateful agent: ``reset(n_rows)`` then ``act(obs (n_rows, D)) -> (n_rows, 4)`` setpoint
     actions in [-1, 1]. Works for any formation size (the observation length fixes V)."""
@@ -108,21 +100,17 @@ class PIDFormation:
         obs = np.asarray(obs, dtype=float)
         if obs.ndim != 2:
             raise ValueError(f"PIDFormation.act: obs must have shape (N, D), got {obs.shape}")
-        n_vehicles = None
-        for v in range(1, 65):
-            if _offsets(v)["_size"] == obs.shape[1]:
-                n_vehicles = v
-                break
+        n_vehicles = next((v for v in range(1, 65) if observation_size(v) == obs.shape[1]), None)
         if n_vehicles is None:
             raise ValueError(f"PIDFormation.act: observation length {obs.shape[1]} matches no formation size")
         if self.integral.shape[0] != obs.shape[0]:
             self.reset(obs.shape[0])
-        o = _offsets(n_vehicles)
+        groups = to_dict(obs, n_vehicles)
         g = self.gains
         dt = 1.0 / self.control_hz
-        err = inverse_slog(obs[:, o["slot_position_error"]:o["slot_position_error"] + 3], POSITION_SCALE_M)
-        derr = inverse_slog(obs[:, o["slot_velocity_error"]:o["slot_velocity_error"] + 3], VELOCITY_SCALE_MPS)
-        wind = inverse_slog(obs[:, o["ambient_wind"]:o["ambient_wind"] + 3], WIND_SCALE_MPS)
+        err = inverse_slog(groups["slot_position_error"], POSITION_SCALE_M)
+        derr = inverse_slog(groups["slot_velocity_error"], VELOCITY_SCALE_MPS)
+        wind = inverse_slog(groups["ambient_wind"], WIND_SCALE_MPS)
         dv = (-g.wind_feedforward * wind[:, 0] - g.kp_along * err[:, 0] - g.kd_along * derr[:, 0]
               - g.ki_along * self.integral[:, 0])
         dy = -g.kp_cross * err[:, 1] - g.ki_cross * self.integral[:, 1]

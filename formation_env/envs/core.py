@@ -137,7 +137,7 @@ class FormationCore:
         err_vec = eng.state[i, :, 10:13] - eng.position_demand[i]
         with np.errstate(invalid="ignore"):
             sep = min_separation_m(eng.state[i:i + 1])[0]
-        gust = eng.turbulence_gust_ned()[i]
+        gust = eng.turbulence_gust_ned(i)
         out = []
         for v in range(eng.n_vehicles):
             info = {

@@ -22,12 +22,13 @@ from ..aircraft import trim
 from ..aircraft.state import N_STATES, POS
 from ..atmosphere.dryden import DrydenConfig, DrydenTurbulence, aircraft_seeds
 from ..atmosphere.frozen_field import (frozen_field_advance, frozen_field_init, frozen_field_params, frozen_field_reset,
-                                       frozen_field_sample)
+                                       frozen_field_rollout, frozen_field_sample)
 from ..atmosphere.wind import WindInput
 from ..frames import quaternion_dcm_terms
 from ..scenarios import Scenario, get_scenario
 from ..sim import FormationSimulator, WakeConfig
 from .config import EnvConfig
+from .observations import slog
 from .rewards import min_separation_m as _min_separation_all
 
 __all__ = ["FormationEpisode", "ActionTarget"]
@@ -171,17 +172,19 @@ class FormationEpisode:
         w = self.scenario.ambient_wind_ned(self.time_s) + self.steady_wind
         return w[:, None, :] + self.gust_ned
 
-    def _sample_gusts(self) -> None:
-        """Read the frozen field at every UAV's current position (the formation's axes: vehicle 0's
-        demanded track)."""
+    def _field_geometry(self) -> tuple[np.ndarray, np.ndarray]:
+        """Where the frozen field is read: every UAV's position (B, V, 3) and the formation's axes,
+        vehicle 0's demanded track (B,). A diverged UAV (its formation's episode is ending) must neither
+        stop the batch nor poison the others: non-finite positions and tracks are read as 0, and that
+        gust is discarded with the episode."""
         vd0 = self.velocity_demand[:, 0]
         track = np.arctan2(vd0[:, 1], vd0[:, 0])
-        # A diverged UAV (its formation's episode is ending) must neither stop the batch nor poison the
-        # others: non-finite positions and tracks are read as 0, and its gust is discarded with the episode.
         pos = self.state[..., 10:13]
-        pos = np.ascontiguousarray(np.where(np.isfinite(pos), pos, 0.0))
-        track = np.where(np.isfinite(track), track, 0.0)
-        frozen_field_sample(self.field_params, self.field_state, pos, track, self.gust_ned)
+        return np.ascontiguousarray(np.where(np.isfinite(pos), pos, 0.0)), np.where(np.isfinite(track), track, 0.0)
+
+    def _sample_gusts(self) -> None:
+        """Read the frozen field at every UAV's current position."""
+        frozen_field_sample(self.field_params, self.field_state, *self._field_geometry(), self.gust_ned)
         np.nan_to_num(self.gust_ned, copy=False)
 
     def _advance_turbulence(self) -> None:
@@ -191,17 +194,21 @@ class FormationEpisode:
             if t is not None:
                 t.step()
 
-    def turbulence_gust_ned(self) -> np.ndarray:
-        """(B, V, 3) the turbulence each UAV flies through now, NED m/s (frozen field or independent)."""
+    def turbulence_gust_ned(self, index: int | None = None) -> np.ndarray:
+        """The turbulence each UAV flies through now, NED m/s (frozen field or independent): (B, V, 3),
+        or (V, 3) for formation ``index`` alone (what the per-formation infos read)."""
+        sel = slice(None) if index is None else index
         if self.frozen_field:
-            return self.gust_ned.copy()
-        out = np.zeros((self.batch_size, self.n_vehicles, 3))
-        if any(t is not None for t in self.turbulence):
-            from ..frames import dcm_body_to_ned_from_quaternion
+            return self.gust_ned[sel].copy()
+        turbulent = self.turbulence if index is None else [self.turbulence[index]]
+        if all(t is None for t in turbulent):
+            return np.zeros_like(self.gust_ned[sel])
+        from ..frames import dcm_body_to_ned_from_quaternion
 
-            with np.errstate(all="ignore"):
-                r_bn = dcm_body_to_ned_from_quaternion(self.state[..., 6:10])
-                out = np.einsum("bvij,bvj->bvi", r_bn, self.turbulence_body())
+        turb_body = self.turbulence_body() if index is None else turbulent[0].velocity_body
+        with np.errstate(all="ignore"):
+            r_bn = dcm_body_to_ned_from_quaternion(self.state[sel][..., 6:10])
+            out = np.einsum("...ij,...j->...i", r_bn, turb_body)
         return np.nan_to_num(out)
 
     def controller_state(self) -> np.ndarray:
@@ -226,7 +233,7 @@ class FormationEpisode:
             nxt_c = np.minimum(nxt, len(times) - 1)
             next_off = np.where(has[:, None], offs[nxt_c] + self.slot_jitter[:, j + 1], off)
             out[:, j + 1, 0:3] = off / slot.span_m
-            out[:, j + 1, 3:6] = np.sign(rate) * np.log1p(np.abs(rate))
+            out[:, j + 1, 3:6] = slog(rate, 1.0)
             out[:, j + 1, 6:9] = (next_off - off) / slot.span_m
             out[:, j + 1, 9] = np.where(has, np.minimum(times[nxt_c] - t, 10.0) / 10.0, 1.0)
         return out
@@ -309,13 +316,8 @@ class FormationEpisode:
                 # The substeps run in one compiled call, so the field is read at the positions of the
                 # decision's start (the transport delays change by < 1 % of a step over 0.1 s), at each
                 # substep's time.
-                amb = amb.copy()
-                for s in range(n_steps):
-                    if s:
-                        frozen_field_advance(self.field_params, self.field_state)
-                        self._sample_gusts()
-                    amb[s] += self.gust_ned
-                frozen_field_advance(self.field_params, self.field_state)
+                gusts = frozen_field_rollout(self.field_params, self.field_state, *self._field_geometry(), n_steps)
+                amb = amb + np.nan_to_num(gusts)
             self.commands = target.mapped
             res, status_any, min_sep = self.sim.step_many(self.state, target.mapped, amb, turb)
             self._take(res, n_steps)
