@@ -1,7 +1,10 @@
-"""Agents that fly the formation simulator.
+"""Agents that fly the formation simulator through its public API.
 
-* :mod:`agents.fcs`: the thesis's PID flight control system (Appendix A), the baseline policy
-  :class:`agents.fcs.PIDFlightControl` (``act(observation, controller_state)``).
-* :mod:`agents.observation`: the observation adapter (aircraft state + demands -> observation)
-  shared by the FCS and the RL environments; virtual-leader slot demands.
+* :mod:`agents.pid_formation`: the formation-keeping controller around the thesis PID (the env's
+  ``setpoints`` action mode).
+* :mod:`agents.fcs`, :mod:`agents.observation`, :mod:`agents.run`: compatibility re-exports of
+  :mod:`formation_env.control` (the thesis PID flight control system, Appendix A),
+  :mod:`formation_env.control.observation` (the FCS observation adapter) and
+  :mod:`formation_env.runs.runner` (the scenario runner), which moved into the package so
+  that ``formation_env`` never imports ``agents``.
 """

@@ -9,7 +9,7 @@ import tempfile
 from collections.abc import Callable
 from pathlib import Path
 
-__all__ = ["atomic_write", "atomic_write_text", "atomic_write_json", "prepare_output_dir"]
+__all__ = ["atomic_write", "atomic_write_text", "atomic_write_json", "prepare_output_dir", "save_figure"]
 
 
 def atomic_write(path: str | os.PathLike, writer: Callable[[Path], None], *, overwrite: bool = False) -> Path:
@@ -58,3 +58,18 @@ def prepare_output_dir(path: str | os.PathLike, *, overwrite: bool = False) -> P
             raise FileExistsError(f"output directory {str(path)!r} exists and is not empty (pass --overwrite)")
     path.mkdir(parents=True, exist_ok=True)
     return path
+
+
+def save_figure(fig, path: str | Path, *, overwrite: bool = False, dpi: int = 120) -> Path:
+    """Save a matplotlib figure atomically (PNG/PDF by suffix) and close it."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    path = Path(path)
+    try:
+        return atomic_write(path, lambda tmp: fig.savefig(tmp, dpi=dpi, bbox_inches="tight", format=path.suffix.lstrip(".") or "png"),
+                            overwrite=overwrite)
+    finally:
+        plt.close(fig)

@@ -155,7 +155,8 @@ def _meta(cfg: TrainConfig, steps: int, extra: dict | None = None) -> dict:
 def _callbacks(cfg: TrainConfig, run_dir: Path, state: dict, log: Callable[[str], None], progress_bar: bool):
     from stable_baselines3.common.callbacks import BaseCallback
 
-    from .evaluate import eval_env_config, run_episodes, selection_score, summarise
+    from .eval_episodes import eval_env_config, run_episodes
+    from .eval_summary import selection_score, summarise
 
     class Curve(BaseCallback):
         """Records every finished training episode (from infos['episode']) for curve.csv."""

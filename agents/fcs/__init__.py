@@ -1,13 +1,19 @@
-"""The thesis's PID flight control system (Appendix A) as the baseline agent.
-
-* :mod:`.gains`: Tables A.8-A.10, A.13 and the open structural choices (:class:`FCSStructure`).
-* :mod:`.sas`, :mod:`.attitude`, :mod:`.autopilot`, :mod:`.tracker`: the layers (pure functions).
-* :mod:`.policy`: :class:`PIDFlightControl` (``act(observation, controller_state)``).
-* :mod:`.closed_loop`: closed-loop linearisation and modes (Tables A.11/A.12).
+"""Compatibility re-export: the thesis PID flight control system now lives in
+:mod:`formation_env.control` (``formation_env/control/``), so the environments do not import
+``agents``. ``from agents.fcs import PIDFlightControl`` and ``import agents.fcs.<module>`` (gains,
+law, tracker, policy, closed_loop; the numpy layers sas/attitude/autopilot/common became the test
+oracle tests/oracles/fcs_numpy.py) keep working; new code should import
+from :mod:`formation_env.control`.
 """
 
-from .gains import AttitudeGains, AutopilotGains, FCSConfig, FCSStructure, SASGains, TrackerGains
-from .policy import CSTATE_NAMES, N_CSTATE, PIDFlightControl
+import importlib as _importlib
+import sys as _sys
 
-__all__ = ["AttitudeGains", "AutopilotGains", "FCSConfig", "FCSStructure", "SASGains", "TrackerGains",
-           "CSTATE_NAMES", "N_CSTATE", "PIDFlightControl"]
+from formation_env.control import *  # noqa: F401,F403
+from formation_env.control import __all__  # noqa: F401
+
+for _name in ("gains", "law", "tracker", "policy", "closed_loop"):
+    _module = _importlib.import_module(f"formation_env.control.{_name}")
+    _sys.modules.setdefault(f"{__name__}.{_name}", _module)
+    globals()[_name] = _module
+del _importlib, _sys, _name, _module

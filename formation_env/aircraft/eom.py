@@ -20,7 +20,7 @@ from .aerodynamics import aero_coefficients, aero_forces_moments, air_data
 from .mass import mass_properties
 from .params import AEROSONDE, AerosondeParams
 from .propulsion import engine, propeller
-from .state import ALPHA_PREV, FUEL, N_INTEGRATED, N_STATES, OMEGA, QUAT, as_state
+from .state import FUEL, N_INTEGRATED, N_STATES, OMEGA, QUAT, as_state
 
 __all__ = [
     "ModelOptions", "DEFAULT_OPTIONS", "derivatives", "step", "validate_controls",
@@ -258,7 +258,7 @@ def _packed(params: AerosondeParams, options: ModelOptions):
     return pack(params, options)
 
 
-BACKENDS = ("numba", "numpy")
+BACKENDS = ("numba",)  # the numpy reference of the step is a test oracle: tests/oracles/aircraft_rk4.py
 
 
 def step(state, controls, wind: WindInput | None = None, dt: float = 0.02,
@@ -275,39 +275,23 @@ def step(state, controls, wind: WindInput | None = None, dt: float = 0.02,
     between successive steps, held over the step's RK4 stages. The quaternion is renormalised
     after each step (AeroSim does not; it keeps the DCM orthonormal over long RL episodes).
 
-    ``backend``: "numba" (compiled, :mod:`.kernels`, the default) or "numpy" (the vectorised
-    reference below); they agree to round-off.
+    ``backend``: "numba", the compiled kernel (:func:`.kernels.rk4_batch`), the only one. Its numpy
+    reference, the same step composed from :func:`derivatives`, is the test oracle
+    ``tests/oracles/aircraft_rk4.py``; the tests hold the two equal to round-off.
     """
     s = as_state(state)
     n = s.shape[0]
     u = validate_controls(controls, n)
     wnd = _wind(wind, n)
     dt = _check_dt(dt)
-    if backend == "numba":
-        from .kernels import rk4_batch
+    if backend not in BACKENDS:
+        raise ValueError(f"backend must be one of {BACKENDS}, got {backend!r} (the numpy reference step is the "
+                         "test oracle tests/oracles/aircraft_rk4.py)")
+    from .kernels import rk4_batch
 
-        wind_arr = np.concatenate(
-            [wnd.wind_ned, wnd.turbulence_body, wnd.ell_translational_ned, wnd.ell_rotational_body], axis=1)
-        return rk4_batch(np.ascontiguousarray(s), np.ascontiguousarray(u), wind_arr, dt, *_packed(params, options))
-    if backend != "numpy":
-        raise ValueError(f"backend must be one of {BACKENDS}, got {backend!r}")
-    with np.errstate(all="ignore"):  # a diverged row must not warn-spam; check_envelope reports it
-        x0 = s[:, :N_INTEGRATED]
-        R = _rotation_terms(s[:, QUAT])
-        alpha_now = air_data(_relative_velocity(s, R, wnd), params)[1]
-        alphadot = (alpha_now - s[:, ALPHA_PREV]) / dt if options.alpha_dot else 0.0
-        k1 = derivatives(x0, u, wnd, alphadot, params, options)
-        k2 = derivatives(x0 + (0.5 * dt) * k1, u, wnd, alphadot, params, options)
-        k3 = derivatives(x0 + (0.5 * dt) * k2, u, wnd, alphadot, params, options)
-        k4 = derivatives(x0 + dt * k3, u, wnd, alphadot, params, options)
-        out = np.empty_like(s)
-        out[:, :N_INTEGRATED] = x0 + (dt / 6.0) * (k1 + 2.0 * (k2 + k3) + k4)
-        quat = out[:, QUAT]
-        out[:, QUAT] = quat / np.sqrt(np.sum(quat * quat, axis=1))[:, None]
-        out[:, FUEL] = np.clip(out[:, FUEL], 0.0, params.fuel_capacity)
-        out[:, OMEGA] = np.maximum(out[:, OMEGA], 0.0)
-        out[:, ALPHA_PREV] = alpha_now
-    return out
+    wind_arr = np.concatenate(
+        [wnd.wind_ned, wnd.turbulence_body, wnd.ell_translational_ned, wnd.ell_rotational_body], axis=1)
+    return rk4_batch(np.ascontiguousarray(s), np.ascontiguousarray(u), wind_arr, dt, *_packed(params, options))
 
 
 def outputs(state, controls, wind: WindInput | None = None, params: AerosondeParams = AEROSONDE,

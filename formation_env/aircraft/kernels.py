@@ -1,9 +1,10 @@
 """Compiled (numba) RK4 step of the Aerosonde: the same equations as :mod:`.eom`, one aircraft per
 loop iteration, so one call serves B = 1 or B = 1024 with no per-operation numpy overhead.
 
-:mod:`.eom` (numpy, vectorised over the batch axis) is the readable reference; this module is
-a line-by-line transcription of it, and ``tests/aircraft/test_aircraft_kernels.py`` checks the two agree to
-round-off. Each aircraft's arithmetic is independent of the others, so a batch reproduces B
+:mod:`.eom` (numpy, vectorised over the batch axis) holds the readable equations; this module is
+a line-by-line transcription of them, and ``tests/aircraft/test_aircraft_kernels.py`` checks it against
+the numpy reference step built on :func:`.eom.derivatives` (the test oracle
+``tests/oracles/aircraft_rk4.py``) to round-off. Each aircraft's arithmetic is independent of the others, so a batch reproduces B
 single runs bit for bit.
 """
 

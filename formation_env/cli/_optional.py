@@ -1,21 +1,9 @@
 """Import the optional parts of the project that are present (each section/benchmark provider
-lives in its own module; a build without one simply skips it)."""
+lives in its own module; a build without one simply skips it). The helper lives in
+:mod:`formation_env.verification.sections` (shared with the report, which must not import the CLI)."""
 
 from __future__ import annotations
 
-import importlib
-from types import ModuleType
+from ..verification.sections import import_available
 
-
-def import_available(names) -> dict[str, ModuleType]:
-    """Import each module in ``names`` that exists; a missing module is skipped, any other import
-    error propagates."""
-    modules = {}
-    for name in names:
-        try:
-            modules[name] = importlib.import_module(name)
-        except ModuleNotFoundError as exc:
-            if exc.name == name:
-                continue
-            raise
-    return modules
+__all__ = ["import_available"]

@@ -15,6 +15,10 @@ def register(sub) -> None:
     p = sub.add_parser("bench", help="measure ELL and dynamics speed (medians of repeated runs)")
     p.add_argument("--json", action="store_true", help="print JSON")
     p.add_argument("--quick", action="store_true", help="fewer repeats (for smoke tests)")
+    p.add_argument("--baseline", default=None, metavar="PATH",
+                   help="an older checkout (its repository root) to measure in the same session: ratios new/old")
+    p.add_argument("--no-busy", dest="busy", action="store_false",
+                   help="skip the runs with a competing busy process")
     p.add_argument("--rllib", action="store_true",
                    help="instead: RLlib env steps/s sampled with 1 and 2 env runners (needs the 'distributed' extra)")
     p.add_argument("--runners", type=int, nargs="+", default=None, help="env runner counts for --rllib (default 1 2)")
@@ -32,9 +36,14 @@ def run(args) -> int:
                             ("--envs-per-runner", args.envs_per_runner), ("--address", args.address)) if v is not None]
     if given:
         raise ValueError(f"{', '.join(given)}: only with --rllib")
+    if args.baseline is not None and not os.path.isdir(os.path.join(args.baseline, "formation_env")):
+        raise ValueError(f"--baseline {args.baseline!r}: not a checkout (no formation_env/ inside)")
     results = {"machine": {"cpus": os.cpu_count(), "python": platform.python_version(), "platform": platform.platform()}}
     for name, module in import_available(BENCH_MODULES).items():
-        results[name.split(".")[1]] = module.run_benchmarks(quick=args.quick)
+        if name == "formation_env.envs.bench":
+            results["envs"] = module.run_benchmarks(quick=args.quick, baseline=args.baseline, busy=args.busy)
+        else:
+            results[name.split(".")[1]] = module.run_benchmarks(quick=args.quick)
     if args.json:
         print(json.dumps(results, indent=2))
     else:
@@ -54,8 +63,14 @@ def _print_human(results: dict) -> None:
         for b, r in w["batched"].items():
             print(f"  batch {int(b):5d}             {r['formation_evaluations_per_s']:9.0f} formation-evaluations/s"
                   f"  ({r['us_per_formation']:.1f} us each)")
+    envs = results.get("envs")
+    if envs:
+        from ..envs.bench import format_table
+
+        print(f"environments ({envs['case']}):")
+        print(format_table(envs))
     for key, value in results.items():
-        if key not in ("machine", "wake"):
+        if key not in ("machine", "wake", "envs"):
             print(f"{key}:")
             print("  " + json.dumps(value, indent=2).replace("\n", "\n  "))
 

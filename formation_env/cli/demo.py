@@ -31,9 +31,8 @@ def register(sub) -> None:
 def run(args) -> int:
     from ..plotting import save_figure
     from ..plotting.wake_figures import sweeps_figure, trefftz_planes_figure
+    from ..runs.runner import run_scenario_to_dir
     from ..verification.sweeps import lateral_sweep, longitudinal_sweep, vertical_sweep
-
-    from agents.run import run_scenario_to_dir
 
     out_dir = args.out or f"results/demo-{_dt.datetime.now().strftime('%Y%m%d-%H%M%S')}"
     out = prepare_output_dir(out_dir, overwrite=args.overwrite)

@@ -1,7 +1,7 @@
 """``formation-env modes``: eigenvalues, damping and frequency of the Aerosonde's modes.
 
 The mode set is chosen by a *source*: ``open_loop`` (default) or ``closed_loop``
-(``--closed-loop``: the Appendix A FCS of :mod:`agents.fcs` closed around the aircraft, with each
+(``--closed-loop``: the Appendix A FCS of :mod:`formation_env.control` closed around the aircraft, with each
 pole set beside Tables A.11/A.12).
 """
 
@@ -28,8 +28,8 @@ def _open_loop(args) -> dict:
 
 
 def _closed_loop(args) -> dict:
-    from agents.fcs.closed_loop import closed_loop_table
     from ..aircraft.trim import trim
+    from ..control.closed_loop import closed_loop_table
 
     t = trim(args.speed, args.altitude, args.fuel)
     table = closed_loop_table(t, alpha_dot="include" if args.alpha_dot else "omit")

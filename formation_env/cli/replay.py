@@ -25,13 +25,12 @@ def register(sub) -> None:
 
 
 def run(args) -> int:
-    from agents.run import run_scenario
-
     from ..io import prepare_output_dir
     from ..plotting import save_figure
     from ..plotting.trajectory3d import trajectory_3d_figure
     from ..replay import EpisodeLog, write_acmi, write_animation
     from ..scenarios import get_scenario
+    from ..runs.runner import run_scenario
 
     sc = get_scenario(args.scenario)
     out = prepare_output_dir(args.out or f"results/replay-{sc.name}-{time.strftime('%Y%m%d-%H%M%S')}", overwrite=args.overwrite)

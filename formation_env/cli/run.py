@@ -21,9 +21,8 @@ def register(sub) -> None:
 
 
 def run(args) -> int:
-    from agents.run import run_scenario_to_dir
-
     from ..scenarios import get_scenario
+    from ..runs.runner import run_scenario_to_dir
 
     get_scenario(args.scenario)  # unknown names fail before anything is created
     out = args.out or f"results/run-{args.scenario}-{time.strftime('%Y%m%d-%H%M%S')}"

@@ -6,17 +6,8 @@ import json
 
 import numpy as np
 
-from ._optional import import_available
-
-# Modules exposing SECTIONS = {key: callable returning a JSON-serialisable dict}.
-SECTION_MODULES = ("formation_env.verification.ell_tables", "formation_env.verification.aircraft")
-
-
-def available_sections() -> dict:
-    sections = {}
-    for module in import_available(SECTION_MODULES).values():
-        sections.update(module.SECTIONS)
-    return sections
+# Modules exposing SECTIONS = {key: callable returning a JSON-serialisable dict} (shared with the report).
+from ..verification.sections import SECTION_MODULES, available_sections  # noqa: F401
 
 
 def register(sub) -> None:

@@ -1,13 +1,22 @@
-"""Environment benchmarks: the single PettingZoo env and the batched vector env, 2 UAVs in
-formation_keeping with the wake on. Medians of repeated runs; no assertions."""
+"""Environment benchmarks (``formation-env bench``): the single PettingZoo env in every action mode
+and with a PID-flown leader, and the SB3 vector env over batch sizes, with 1 and 2 threads, with
+and without a competing busy process, optionally against an older checkout measured in the same
+session (``--baseline PATH``: ratios new / old). Each configuration runs in its own subprocess
+(:mod:`formation_env.envs.bench_cases`), so thread settings and the numba caches of the two
+checkouts never mix. No assertions: speed is reported, not tested.
+"""
 
 from __future__ import annotations
 
-import time
+import json
+import os
+import shutil
+import subprocess
+import sys
+import tempfile
+from pathlib import Path
 
-import numpy as np
-
-__all__ = ["run_benchmarks"]
+__all__ = ["run_benchmarks", "BATCH_SIZES", "SINGLE_CASES"]
 
 PEERS = {
     "PyFlyt 2-aircraft dogfight (joint steps/s)": 408,
@@ -15,70 +24,85 @@ PEERS = {
     "VMAS CPU flocking, 1,024 envs (env-steps/s)": 44_500,
     "JaxMARL MPE CPU (env-steps/s)": 443_000,
 }
+SINGLE_CASES = [{"kind": "single", "mode": m, "learning": "all"} for m in ("surfaces", "residual", "setpoints")] + [
+    {"kind": "single", "mode": "setpoints", "learning": "followers"}]
+BATCH_SIZES = (1, 8, 15, 16, 32, 256, 1024)
 
 
-def _median(fn, repeats):
-    times = []
-    for _ in range(repeats):
-        t0 = time.perf_counter()
-        fn()
-        times.append(time.perf_counter() - t0)
-    return float(np.median(times))
+def _vector_cases(sizes) -> list[dict]:
+    return [{"kind": "vector", "formations": n, "mode": "setpoints", "learning": "followers"} for n in sizes]
 
 
-def _single_env(mode: str, decisions: int, repeats: int) -> dict:
-    import formation_env
-
-    env = formation_env.parallel_env("formation_keeping", action_mode=mode)
-    zero = {a: np.zeros(4, np.float32) for a in env.possible_agents}
-    env.reset(seed=0)
-
-    def run():
-        for _ in range(decisions):
-            if not env.agents:
-                env.reset(seed=0)
-            env.step(zero)
-
-    run()  # compile/warm up
-    t = _median(run, repeats)
-    physics = decisions * env.substeps / t
-    return {"action_mode": mode, "decisions_per_s": decisions / t, "physics_steps_per_s": physics,
-            "uav_physics_steps_per_s": 2 * physics, "real_time_factor": physics * env.engine.dt}
+def _busy() -> subprocess.Popen:
+    """A process that keeps one core busy (pure Python spin)."""
+    return subprocess.Popen([sys.executable, "-c", "while True: pass"])
 
 
-def _vector(n_formations: int, mode: str, decisions: int, repeats: int, wake_update_every: int = 1) -> dict:
-    from .vector import FormationVecEnv
+def _run(code_root: str | None, cases: list[dict], threads: int, busy: bool, budget_s: float, repeats: int) -> list[dict]:
+    """Run ``cases`` in a fresh interpreter importing formation_env from ``code_root`` (None: this one)."""
+    env = dict(os.environ, NUMBA_NUM_THREADS=str(threads), OMP_NUM_THREADS=str(threads))
+    src = Path(__file__).with_name("bench_cases.py")
+    with tempfile.TemporaryDirectory() as tmp:
+        script = Path(tmp) / "bench_cases_script.py"
+        shutil.copy(src, script)  # run outside both packages: the checkout under test is on PYTHONPATH
+        root = code_root if code_root is not None else str(Path(__file__).resolve().parents[2])
+        env["PYTHONPATH"] = root + os.pathsep + env.get("PYTHONPATH", "")
+        spin = _busy() if busy else None
+        try:
+            out = subprocess.run([sys.executable, str(script), json.dumps(
+                {"cases": cases, "budget_s": budget_s, "repeats": repeats})], env=env, cwd=tmp, capture_output=True,
+                text=True, check=False)
+        finally:
+            if spin is not None:
+                spin.kill()
+                spin.wait()
+    if out.returncode != 0:
+        raise RuntimeError(f"bench subprocess failed ({code_root or 'this checkout'}):\n{out.stderr[-2000:]}")
+    return json.loads(out.stdout.strip().splitlines()[-1])
 
-    venv = FormationVecEnv(n_formations, scenario="formation_keeping", learning="all", action_mode=mode, seed=0,
-                           wake_update_every=wake_update_every)
-    venv.reset()
-    act = np.zeros((venv.num_envs, 4), np.float32)
 
-    def run():
-        for _ in range(decisions):
-            venv.step(act)
-
-    run()
-    t = _median(run, repeats)
-    sub = venv.batch.core.substeps
-    physics = n_formations * decisions * sub / t
-    return {"formations": n_formations, "action_mode": mode, "wake_hz": 50.0 / wake_update_every,
-            "formation_physics_steps_per_s": physics,
-            "uav_physics_steps_per_s": 2 * physics, "real_time_factor_per_formation": decisions * sub * 0.02 / t,
-            "agent_decisions_per_s": venv.num_envs * decisions / t}
+def _key(case: dict) -> str:
+    if case["kind"] == "single":
+        return f"single {case['mode']} learning={case['learning']}"
+    return f"vector B={case['formations']} {case['mode']} learning={case['learning']}" + (
+        " benefit" if case.get("benefit") else "")
 
 
-def run_benchmarks(quick: bool = False) -> dict:
-    reps = 3 if quick else 5
-    out = {"case": "formation_keeping, 2 Aerosondes, ELL wake on every 50 Hz physics step, 10 Hz decisions",
-           "single_env": [_single_env("surfaces", 50 if quick else 300, reps),
-                          _single_env("residual", 20 if quick else 100, reps)],
-           "vector_env": [], "peers_reported": PEERS}
-    sizes = (1, 64) if quick else (1, 64, 1024)
-    for n in sizes:
-        out["vector_env"].append(_vector(n, "surfaces", 5 if n >= 1024 else 20, reps))
-    if not quick:
-        out["vector_env"].append(_vector(1024, "surfaces", 5, reps, wake_update_every=2))
-        out["vector_env"].append(_vector(64, "residual", 10, reps))
-        out["vector_env"].append(_vector(1024, "residual", 3, 3))
+def run_benchmarks(quick: bool = False, baseline: str | None = None, busy: bool = True) -> dict:
+    """Every configuration: {case: {"new": ..., "old": ..., "ratio": new/old}} for (threads, busy)."""
+    sizes = (1, 16, 256) if quick else BATCH_SIZES
+    budget, repeats = (0.2, 2) if quick else (0.6, 3)
+    cases = SINGLE_CASES + _vector_cases(sizes) + [{"kind": "vector", "formations": 256, "mode": "setpoints",
+                                                    "learning": "followers", "benefit": True}]
+    configs = [(2, False), (1, False)] + ([(2, True), (1, True)] if busy else [])
+    out: dict = {"case": "formation_keeping, 2 Aerosondes, ELL wake every 50 Hz physics step, 10 Hz decisions",
+                 "baseline": baseline, "peers_reported": PEERS, "configurations": {}}
+    for threads, is_busy in configs:
+        name = f"threads={threads}" + (" busy" if is_busy else "")
+        new = _run(None, cases, threads, is_busy, budget, repeats)
+        # the older code may lack newer cases (the benefit case is measured on both when possible)
+        old = _run(baseline, cases, threads, is_busy, budget, repeats) if baseline else None
+        rows = {}
+        for i, case in enumerate(cases):
+            metric = "physics_steps_per_s" if case["kind"] == "single" else "uav_physics_steps_per_s"
+            row = {"new": new[i][metric]}
+            if old is not None:
+                row["old"] = old[i][metric]
+                row["ratio"] = row["new"] / row["old"]
+            rows[_key(case)] = row
+        out["configurations"][name] = rows
     return out
+
+
+def format_table(res: dict) -> str:
+    """Markdown table of :func:`run_benchmarks` results."""
+    confs = list(res["configurations"])
+    head = "| case (physics steps/s; vector: UAV physics steps/s) | " + " | ".join(confs) + " |"
+    lines = [head, "|" + "---|" * (len(confs) + 1)]
+    for key in res["configurations"][confs[0]]:
+        cells = []
+        for c in confs:
+            r = res["configurations"][c][key]
+            cells.append(f"{r['new']:,.0f}" + (f" ({r['ratio']:.1f}x)" if "ratio" in r else ""))
+        lines.append(f"| {key} | " + " | ".join(cells) + " |")
+    return "\n".join(lines)

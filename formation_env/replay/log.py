@@ -72,7 +72,7 @@ class EpisodeLog:
 
     @classmethod
     def from_scenario_run(cls, run) -> "EpisodeLog":
-        """From :class:`agents.run.ScenarioRun` (its ``time`` and ``h`` histories)."""
+        """From :class:`formation_env.runs.runner.ScenarioRun` (its ``time`` and ``h`` histories)."""
         h = run.h
         return cls(run.time, h["position_ned"], h["euler"], h["velocity_ned"], h["induced_wind_ned"],
                    h["induced_omega_body"], h["ambient_wind_ned"], h["position_demand_ned"],

@@ -83,7 +83,7 @@ class Section:
 # ---------------------------------------------------------------- verification tables
 
 def _verify(keys_titles):
-    from ..cli.verify import available_sections
+    from ..verification.sections import available_sections
 
     avail = available_sections()
     tables, data = [], {}
@@ -296,12 +296,11 @@ def _scenario_rows(name: str, m: dict, quick: bool) -> list[Row]:
 
 
 def scenarios(ctx: ReportContext) -> Section:
-    from agents.run import run_scenario, scenario_metrics
-
     from ..plotting.scenario_figures import scenario_figures
     from ..plotting.trajectory3d import trajectory_3d_figure
     from ..replay.log import EpisodeLog
     from ..scenarios import scenario_names
+    from ..runs.runner import run_scenario, scenario_metrics
 
     sec = Section("scenarios", "Scenarios flown by the thesis FCS (A.5.3, 6.4-6.6; Figs. 6.8-6.23 style)",
                   "Each scenario flown by the PID agents on the formation simulator (ELL wake on unless noted). "
@@ -337,10 +336,9 @@ def scenarios(ctx: ReportContext) -> Section:
 
 
 def replay(ctx: ReportContext) -> Section:
-    from agents.run import run_scenario
-
     from ..replay import EpisodeLog, parse_acmi, write_acmi, write_animation
     from ..replay.acmi import geodetic_to_ned, object_id
+    from ..runs.runner import run_scenario
 
     name = "reconfiguration"
     dur = QUICK_DURATION_S if ctx.quick else None

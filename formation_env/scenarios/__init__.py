@@ -1,6 +1,6 @@
 """Thesis scenarios as data (:mod:`.definitions`): ``tracking`` (A.5.3), ``gust`` (6.4),
-``formation_keeping`` (6.5), ``reconfiguration`` (6.6). The runner that flies them with the PID
-agents is :mod:`agents.run`; the env reuses these definitions."""
+``formation_keeping`` (6.5), ``reconfiguration`` (6.6) and this project's formations; the env reuses
+these definitions. :mod:`formation_env.runs` flies them with the thesis PID on every aircraft."""
 
 from .definitions import AEROSONDE_SPAN_M, SCENARIOS, Scenario, SlotSchedule, get_scenario, scenario_names
 

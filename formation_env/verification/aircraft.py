@@ -86,9 +86,9 @@ def modes_open() -> dict:
 
 
 def modes_closed() -> dict:
-    """Closed-loop modes (the Appendix A FCS of :mod:`agents.fcs` around the Table A.5 trim,
+    """Closed-loop modes (the Appendix A FCS of :mod:`formation_env.control` around the Table A.5 trim,
     alpha-dot terms omitted) against Tables A.11/A.12, 15 % of |lambda| per pole."""
-    from agents.fcs.closed_loop import closed_loop_table
+    from ..control.closed_loop import closed_loop_table
 
     return closed_loop_table(trim())
 

@@ -324,7 +324,7 @@ def plot_map(path, cache: dict | None = None, *, y_b=None, z_b=None, overwrite: 
     and vs z at its y. The contours use a finer grid computed here (``y_b``, ``z_b``)."""
     import matplotlib.pyplot as plt
 
-    from ..plotting import save_figure
+    from ..io import save_figure
 
     c = load_cache() if cache is None else cache
     x_b, z_ex = c["parameters"]["x_b"], c["z_exclusion_b"]

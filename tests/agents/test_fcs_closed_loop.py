@@ -5,8 +5,8 @@ import json
 import numpy as np
 import pytest
 
-from agents.fcs import FCSStructure
-from agents.fcs.closed_loop import THESIS_A11, THESIS_A12, closed_loop_table
+from formation_env.control import FCSStructure
+from formation_env.control.closed_loop import THESIS_A11, THESIS_A12, closed_loop_table
 from formation_env.aircraft import trim
 from formation_env.cli import main
 

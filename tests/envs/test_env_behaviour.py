@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 import formation_env
-from agents.run import run_scenario
+from formation_env.runs.runner import run_scenario
 from formation_env.envs import EnvConfig, Randomisation
 from formation_env.scenarios import scenario_names
 
@@ -146,18 +146,25 @@ def test_truncation_at_the_time_limit():
 
 
 def test_compiled_observations_equal_the_numpy_definition():
-    from formation_env.envs.observations import build_observations, build_observations_reference
+    """The decision step's compiled observation equals the readable numpy definition (tests/oracles),
+    slot schedule features included, along a randomised episode with every action mode's PID state."""
+    from tests.oracles.env_step import build_observations_reference, slot_schedule_features
 
     env = formation_env.parallel_env("reconfiguration", action_mode="residual", randomisation=RANDOM)
     env.reset(seed=4)
     rng = np.random.default_rng(1)
     for _ in range(40):
-        env.step({a: rng.uniform(-1, 1, 4) for a in env.agents})
-        e, c = env.engine, env.core
-        args = (e.state, e.induced, e.omega, e.ambient_wind(), e.turbulence_body(), e.position_demand_now(),
-                e.velocity_demand, c.previous_action, e.slot_schedule_features(), e.controller_state(),
-                e.scenario.airspeed_mps, e.scenario.altitude_m)
-        np.testing.assert_allclose(build_observations(*args), build_observations_reference(*args), rtol=0, atol=1e-12)
+        act = {a: rng.uniform(-1, 1, 4) for a in env.agents}
+        obs, *_ = env.step(act)
+        e = env.engine
+        prev = e.sim_state.previous_action
+        np.testing.assert_allclose(prev[0, 1], act["uav_1"], rtol=0, atol=1e-6)
+        sched = slot_schedule_features(e.scenario, e.time_s, e.slot_jitter)
+        ref = build_observations_reference(e.state, e.induced, e.omega, e.ambient_wind(), np.zeros_like(e.induced),
+                                           e.position_demand, e.velocity_demand, prev, sched, e.controller_state(),
+                                           e.scenario.airspeed_mps, e.scenario.altitude_m)
+        np.testing.assert_allclose(env.core.observations(), ref, rtol=0, atol=1e-12)
+        np.testing.assert_allclose(obs["uav_1"], ref[0, 1].astype(np.float32), rtol=0, atol=0)
 
 
 def test_leader_manoeuvre_turns_climbs_and_changes_speed_as_drawn():

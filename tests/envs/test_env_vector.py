@@ -9,10 +9,12 @@ from formation_env.envs import FormationVecEnv, FormationVectorEnv, Randomisatio
 RANDOM = Randomisation(initial_offset_m=2.0, slot_offset_b=0.1, steady_wind_mps=4.0, turbulence_sigma_mps=1.0)
 
 
-@pytest.mark.parametrize("n_formations,mode", [(3, "residual"), (18, "surfaces")])
-def test_batched_formations_equal_single_envs_bit_for_bit(n_formations, mode):
-    """18 formations use the parallel (threaded) kernels; results are still bit-identical."""
-    opts = dict(scenario="reconfiguration", action_mode=mode, learning="all", randomisation=RANDOM, duration_s=8.0)
+@pytest.mark.parametrize("n_formations,mode,learning", [(3, "residual", "all"), (18, "surfaces", "all"),
+                                                        (17, "setpoints", "followers")])
+def test_batched_formations_equal_single_envs_bit_for_bit(n_formations, mode, learning):
+    """Batches run on the thread pool in chunks (with a PID-flown leader too); results are still
+    bit-identical to single envs."""
+    opts = dict(scenario="reconfiguration", action_mode=mode, learning=learning, randomisation=RANDOM, duration_s=8.0)
     venv = FormationVecEnv(n_formations, seed=100, **opts)
     obs = venv.reset()
     singles = [formation_env.parallel_env(**opts) for _ in range(n_formations)]
@@ -24,17 +26,18 @@ def test_batched_formations_equal_single_envs_bit_for_bit(n_formations, mode):
     for step in range(40):
         for f in live:
             for k in range(a):
-                assert np.array_equal(obs[f * a + k], single_obs[f][f"uav_{k}"]), (step, f, k)
+                assert np.array_equal(obs[f * a + k], single_obs[f][singles[f].possible_agents[k]]), (step, f, k)
         act = rng.uniform(-1, 1, (venv.num_envs, 4)).astype(np.float32)
         obs, rew, done, infos = venv.step(act)
         for f in sorted(live):
-            single_obs[f], r, term, trunc, _ = singles[f].step({f"uav_{k}": act[f * a + k] for k in range(a)})
+            names = singles[f].possible_agents
+            single_obs[f], r, term, trunc, _ = singles[f].step({names[k]: act[f * a + k] for k in range(a)})
             for k in range(a):
-                assert rew[f * a + k] == np.float32(r[f"uav_{k}"])
-                assert done[f * a + k] == (term[f"uav_{k}"] or trunc[f"uav_{k}"])
+                assert rew[f * a + k] == np.float32(r[names[k]])
+                assert done[f * a + k] == (term[names[k]] or trunc[names[k]])
             if done[f * a]:  # the VecEnv auto-reset it: its last observation is in the infos
                 for k in range(a):
-                    assert np.array_equal(infos[f * a + k]["terminal_observation"], single_obs[f][f"uav_{k}"])
+                    assert np.array_equal(infos[f * a + k]["terminal_observation"], single_obs[f][names[k]])
                 live.discard(f)
                 finished_seen += 1
     assert live  # most formations kept flying for the whole comparison

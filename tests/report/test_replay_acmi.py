@@ -5,7 +5,7 @@ GIF; CLI."""
 import numpy as np
 import pytest
 
-from agents.run import run_scenario
+from formation_env.runs.runner import run_scenario
 from formation_env.cli import main
 from formation_env.replay import EpisodeLog, EpisodeRecorder, acmi_text, parse_acmi, write_acmi
 from formation_env.replay.acmi import geodetic_to_ned, ned_to_geodetic, object_id

@@ -5,7 +5,7 @@ import json
 import numpy as np
 import pytest
 
-from agents.run import run_scenario, run_scenario_to_dir, scenario_metrics
+from formation_env.runs.runner import run_scenario, run_scenario_to_dir, scenario_metrics
 from formation_env.cli import main
 from formation_env.scenarios import SlotSchedule, get_scenario
 

@@ -1,6 +1,6 @@
 """Gains and structure of the thesis FCS (Appendix A), as printed in Tables A.8-A.10 and A.13.
 
-The gains keep the thesis's printed signs; :mod:`agents.fcs` applies them with the sign
+The gains keep the thesis's printed signs; :mod:`formation_env.control` applies them with the sign
 conventions (documented in ``docs/fcs.md``) that make the printed numbers do on this model what
 the thesis describes. Every dataclass is frozen and validated (``ValueError`` names the field).
 """
@@ -125,7 +125,7 @@ class FCSConfig:
 
     ``trim_controls`` (elevator, aileron, rudder, throttle) and ``trim_theta_rad`` are the
     reference about which the thesis's perturbation controllers act (Table A.5 trim by default,
-    filled in by :meth:`agents.fcs.PIDFlightControl.from_trim`). ``surface_limit_rad`` and the
+    filled in by :meth:`formation_env.control.PIDFlightControl.from_trim`). ``surface_limit_rad`` and the
     throttle range are the saturation limits of A.3/A.4.
     """
 

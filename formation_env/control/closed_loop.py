@@ -2,7 +2,7 @@
 
 The augmented state is the open-loop model's 14 Euler-form states (alpha-dot terms omitted, as
 Simulink linmod does; see :mod:`formation_env.aircraft.linearise`) plus the controller states
-of :class:`~agents.fcs.PIDFlightControl`; the FCS runs in autopilot mode (no trajectory tracker,
+of :class:`~formation_env.control.PIDFlightControl`; the FCS runs in autopilot mode (no trajectory tracker,
 constant demands equal to the trim's), exactly the law the simulations fly. Jacobians are
 central differences of the closed-loop derivative.
 
@@ -22,8 +22,8 @@ from formation_env import frames
 from formation_env.aircraft.linearise import LIN_STATES, euler_form_derivatives, modal_analysis
 from formation_env.aircraft.trim import TrimResult, trim
 
-from ..observation import observation_from_arrays
 from .gains import FCSStructure
+from .observation import observation_from_arrays
 from .policy import CSTATE_NAMES, PIDFlightControl
 
 __all__ = ["CL_STATES", "CL_LONGITUDINAL", "CL_LATERAL", "closed_loop_jacobian", "closed_loop_modes", "closed_loop_table",

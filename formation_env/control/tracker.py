@@ -1,4 +1,5 @@
-"""Trajectory tracker (thesis A.5, Eqs. A.16-A.21, Table A.13), wrapped around the autopilot.
+"""Trajectory-tracker errors (thesis A.5, Eqs. A.16-A.21) in numpy, for histories and analysis; the
+tracker itself is compiled in :func:`formation_env.control.law.trajectory_tracker`.
 
 With ``chi_d = atan2(Vd_east, Vd_north)`` the demanded track, ``d = X - X_d`` (current minus
 demanded position, NED) and ``dV = V - V_d``, rotated into the demanded-track frame (u along the
@@ -14,10 +15,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from .common import pi_integrator_rate, saturate
-from .gains import TrackerGains
 
-__all__ = ["track_errors", "trajectory_tracker"]
+__all__ = ["track_errors"]
 
 
 def track_errors(position_ned, velocity_ned, position_demand_ned, velocity_demand_ned):
@@ -31,19 +30,3 @@ def track_errors(position_ned, velocity_ned, position_demand_ned, velocity_deman
     otd = -s * d[..., 0] + c * d[..., 1]
     dotd = -s * dv[..., 0] + c * dv[..., 1]
     return atd, otd, dotd, chi_d
-
-
-def trajectory_tracker(position_ned, velocity_ned, position_demand_ned, velocity_demand_ned, integral,
-                       gains: TrackerGains, anti_windup: bool = True):
-    """``(chi_demand, V_demand, integral_rate, errors dict)``."""
-    atd, otd, dotd, chi_d = track_errors(position_ned, velocity_ned, position_demand_ned, velocity_demand_ned)
-    lim = gains.track_angle_demand_limit_rad
-    raw = gains.Kp_offtrack * otd + gains.Ki_offtrack * integral + gains.Kd_offtrack * dotd
-    corr, hi, lo = saturate(raw, -lim, lim)
-    chi_demand = chi_d - corr
-    speed_d = np.linalg.norm(np.asarray(velocity_demand_ned), axis=-1)
-    dv, _, _ = saturate(gains.Kp_alongtrack * atd, -gains.velocity_demand_limit_mps, gains.velocity_demand_limit_mps)
-    v_demand = speed_d - dv
-    rate = pi_integrator_rate(otd, gains.Ki_offtrack, hi, lo, anti_windup)
-    return chi_demand, v_demand, rate, {"along_track": atd, "off_track": otd, "off_track_rate": dotd,
-                                        "track_demand": chi_d}

@@ -1,0 +1,91 @@
+"""Benchmark cases on the public env API only, so the same file measures this checkout and an older
+one (``python -m formation_env.envs.bench_cases CASES_JSON`` with the older checkout first on
+``PYTHONPATH``; :mod:`formation_env.envs.bench` runs it both ways in the same session).
+
+A case is a dict: ``{"kind": "single", "mode": ..., "learning": ...}`` (PettingZoo parallel env,
+B = 1) or ``{"kind": "vector", "formations": B, "mode": ..., "learning": ..., "wake_update_every": k,
+"benefit": bool}`` (SB3 VecEnv). All cases: formation_keeping, 2 Aerosondes, wake on, 10 Hz
+decisions (5 physics steps each). Result: the best of ``repeats`` timed runs after a warm-up run
+(best, not median: on a shared 2-core machine the slower runs measure the neighbours).
+"""
+
+from __future__ import annotations
+
+import json
+import sys
+import time
+
+import numpy as np
+
+__all__ = ["run_case", "run_cases"]
+
+
+def _best(fn, repeats: int) -> float:
+    fn()  # compile / warm up
+    times = []
+    for _ in range(repeats):
+        t0 = time.perf_counter()
+        fn()
+        times.append(time.perf_counter() - t0)
+    return float(min(times))
+
+
+def _single(case: dict, budget_s: float, repeats: int) -> dict:
+    import formation_env
+
+    env = formation_env.parallel_env("formation_keeping", action_mode=case["mode"], learning=case["learning"])
+    zero = {a: np.zeros(4, np.float32) for a in env.possible_agents}
+    env.reset(seed=0)
+    substeps = env.substeps
+    decisions = max(20, int(budget_s * 2000))
+
+    def run():
+        for _ in range(decisions):
+            if not env.agents:
+                env.reset(seed=0)
+            env.step(zero)
+
+    t = _best(run, repeats)
+    physics = decisions * substeps / t
+    return {**case, "decisions_per_s": decisions / t, "physics_steps_per_s": physics,
+            "uav_physics_steps_per_s": 2 * physics}
+
+
+def _vector(case: dict, budget_s: float, repeats: int) -> dict:
+    from formation_env.envs.vector import FormationVecEnv
+
+    n = int(case["formations"])
+    opts = {"wake_update_every": case.get("wake_update_every", 1)}
+    if case.get("benefit"):
+        opts["compute_benefit"] = True
+    venv = FormationVecEnv(n, scenario="formation_keeping", learning=case["learning"], action_mode=case["mode"], seed=0,
+                           **opts)
+    venv.reset()
+    act = np.zeros((venv.num_envs, 4), np.float32)
+    decisions = max(2, int(budget_s * 40_000 / n))
+
+    def run():
+        for _ in range(decisions):
+            venv.step(act)
+
+    t = _best(run, repeats)
+    physics = n * decisions * 5 / t
+    return {**case, "formation_physics_steps_per_s": physics, "uav_physics_steps_per_s": 2 * physics,
+            "agent_decisions_per_s": venv.num_envs * decisions / t}
+
+
+def run_case(case: dict, budget_s: float = 0.5, repeats: int = 3) -> dict:
+    if case["kind"] == "single":
+        return _single(case, budget_s, repeats)
+    if case["kind"] == "vector":
+        return _vector(case, budget_s, repeats)
+    raise ValueError(f"unknown bench case kind {case['kind']!r}")
+
+
+def run_cases(cases: list[dict], budget_s: float = 0.5, repeats: int = 3) -> list[dict]:
+    return [run_case(c, budget_s, repeats) for c in cases]
+
+
+if __name__ == "__main__":  # pragma: no cover - driven by formation_env.envs.bench in a subprocess
+    spec = json.loads(sys.argv[1])
+    print(json.dumps(run_cases(spec["cases"], spec.get("budget_s", 0.5), spec.get("repeats", 3))))

@@ -1,0 +1,181 @@
+"""Compiled per-formation observation and reward: what the decision step hands to agents.
+
+The feature table, scales and the reward's definition are documented in
+:mod:`formation_env.envs.observations` and :class:`formation_env.envs.config.RewardWeights`; the
+readable numpy definitions live in ``tests/oracles`` and tests hold these kernels to them.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numba as nb
+import numpy as np
+
+from ..aircraft.kernels import _air
+from ..frames import quaternion_dcm_terms
+
+__all__ = ["observe_formation", "reward_formation", "REWARD_TERMS", "OBS_CLIP", "OMEGA_REF", "min_separation_each"]
+
+_jit = nb.njit(cache=True, error_model="numpy")
+
+OBS_CLIP = 10.0
+OMEGA_REF = 545.0  # rad/s, engine shaft speed scale
+SCHEDULE_SIZE = 10
+CONTROLLER_STATE_SIZE = 7
+ALTITUDE_SCALE_M = 10.0
+POSITION_SCALE_M = 1.0
+VELOCITY_SCALE_MPS = 1.0
+WIND_SCALE_MPS = 1.0
+NEIGHBOUR_POSITION_SCALE_M = 3.0
+CONTROLLER_STATE_SCALE = 1.0
+REWARD_TERMS = ("slot", "progress", "separation", "effort", "rate", "benefit", "collision", "crash")
+_ERROR_CAP_M = 5000.0  # beyond any reachable distance: only bounds a diverged UAV's reward
+_TERMINAL_ERROR_CAP_M = 100.0
+
+
+@_jit
+def _clean(x):
+    if x != x:
+        return 0.0
+    return min(OBS_CLIP, max(-OBS_CLIP, x))
+
+
+@_jit
+def _slog(x, scale):
+    if x >= 0.0:
+        return math.log1p(x / scale)
+    return -math.log1p(-x / scale)
+
+
+@_jit
+def observe_formation(x, induced, omega, amb, pd, vd, prev, schedule, cstate, trim_airspeed, altitude, air_params,
+                      vel, chi, out):
+    """Observation rows (V, D) of one formation into ``out``. x (V, 16); induced, amb (V, 3) NED m/s;
+    omega (V, 3) body rad/s; pd, vd (V, 3) demands; prev (V, 4); schedule (V, 10); cstate (V, 7);
+    vel (V, 3), chi (V,) scratch."""
+    nv = x.shape[0]
+    wind = np.zeros(12)
+    for a in range(nv):
+        xa = x[a]
+        r00, r01, r02, r10, r11, r12, r20, r21, r22 = quaternion_dcm_terms(xa[6], xa[7], xa[8], xa[9])
+        vel[a, 0] = r00 * xa[0] + r01 * xa[1] + r02 * xa[2]
+        vel[a, 1] = r10 * xa[0] + r11 * xa[1] + r12 * xa[2]
+        vel[a, 2] = r20 * xa[0] + r21 * xa[1] + r22 * xa[2]
+        chi[a] = math.atan2(vd[a, 1], vd[a, 0])
+    for a in range(nv):
+        xa = x[a]
+        o = out[a]
+        for k in range(3):
+            wind[k] = amb[a, k] + induced[a, k]
+        va, al, be = _air(xa, wind, air_params)[:3]
+        e0, ex, ey, ez = xa[6], xa[7], xa[8], xa[9]
+        n2 = e0 * e0 + ex * ex + ey * ey + ez * ez
+        phi = math.atan2(2.0 * (e0 * ex + ey * ez), e0 * e0 - ex * ex - ey * ey + ez * ez)
+        theta = math.asin(min(1.0, max(-1.0, 2.0 * (e0 * ey - ex * ez) / n2)))
+        psi = math.atan2(2.0 * (ex * ey + e0 * ez), e0 * e0 + ex * ex - ey * ey - ez * ez)
+        c, s = math.cos(chi[a]), math.sin(chi[a])
+        o[0] = (va - trim_airspeed) / 5.0
+        o[1] = al / 0.1
+        o[2] = be / 0.1
+        o[3] = phi / 0.5
+        o[4] = theta / 0.5
+        o[5] = ((psi - chi[a] + math.pi) % (2.0 * math.pi) - math.pi) / 0.5
+        o[6], o[7], o[8] = xa[3], xa[4], xa[5]
+        o[9] = _slog(-xa[12] - altitude, ALTITUDE_SCALE_M)
+        dx, dy, dz = xa[10] - pd[a, 0], xa[11] - pd[a, 1], xa[12] - pd[a, 2]
+        o[10] = _slog(c * dx + s * dy, POSITION_SCALE_M)
+        o[11] = _slog(-s * dx + c * dy, POSITION_SCALE_M)
+        o[12] = _slog(dz, POSITION_SCALE_M)
+        dx, dy, dz = vel[a, 0] - vd[a, 0], vel[a, 1] - vd[a, 1], vel[a, 2] - vd[a, 2]
+        o[13] = _slog(c * dx + s * dy, VELOCITY_SCALE_MPS)
+        o[14] = _slog(-s * dx + c * dy, VELOCITY_SCALE_MPS)
+        o[15] = _slog(dz, VELOCITY_SCALE_MPS)
+        r00, r01, r02, r10, r11, r12, r20, r21, r22 = quaternion_dcm_terms(e0, ex, ey, ez)
+        w0, w1, w2 = induced[a, 0], induced[a, 1], induced[a, 2]
+        o[16] = r00 * w0 + r10 * w1 + r20 * w2  # body = R^T ned
+        o[17] = r01 * w0 + r11 * w1 + r21 * w2
+        o[18] = r02 * w0 + r12 * w1 + r22 * w2
+        o[19], o[20], o[21] = omega[a, 0], omega[a, 1], omega[a, 2]
+        dx, dy, dz = amb[a, 0], amb[a, 1], amb[a, 2]
+        o[22] = _slog(c * dx + s * dy, WIND_SCALE_MPS)
+        o[23] = _slog(-s * dx + c * dy, WIND_SCALE_MPS)
+        o[24] = _slog(dz, WIND_SCALE_MPS)
+        o[25] = xa[14] / OMEGA_REF - 1.0
+        o[26], o[27], o[28], o[29] = prev[a, 0], prev[a, 1], prev[a, 2], prev[a, 3]
+        k = 30
+        for m in range(SCHEDULE_SIZE):
+            o[k + m] = schedule[a, m]
+        k += SCHEDULE_SIZE
+        for m in range(CONTROLLER_STATE_SIZE):
+            o[k + m] = _slog(cstate[a, m], CONTROLLER_STATE_SCALE)
+        k += CONTROLLER_STATE_SIZE
+        for j in range(nv):
+            if j == a:
+                continue
+            dx, dy, dz = x[j, 10] - xa[10], x[j, 11] - xa[11], x[j, 12] - xa[12]
+            o[k] = _slog(c * dx + s * dy, NEIGHBOUR_POSITION_SCALE_M)
+            o[k + 1] = _slog(-s * dx + c * dy, NEIGHBOUR_POSITION_SCALE_M)
+            o[k + 2] = _slog(dz, NEIGHBOUR_POSITION_SCALE_M)
+            dx, dy, dz = vel[j, 0] - vel[a, 0], vel[j, 1] - vel[a, 1], vel[j, 2] - vel[a, 2]
+            o[k + 3] = _slog(c * dx + s * dy, VELOCITY_SCALE_MPS)
+            o[k + 4] = _slog(-s * dx + c * dy, VELOCITY_SCALE_MPS)
+            o[k + 5] = _slog(dz, VELOCITY_SCALE_MPS)
+            k += 6
+        for k in range(o.shape[0]):
+            o[k] = _clean(o[k])
+
+
+@_jit
+def min_separation_each(x, out):
+    """(V,) distance from each UAV's CG to its nearest neighbour (inf alone; NaN if non-finite)."""
+    nv = x.shape[0]
+    for i in range(nv):
+        best = np.inf
+        for j in range(nv):
+            if j != i:
+                d = math.sqrt((x[i, 10] - x[j, 10]) ** 2 + (x[i, 11] - x[j, 11]) ** 2 + (x[i, 12] - x[j, 12]) ** 2)
+                if d < best or d != d:
+                    best = d
+        out[i] = best
+
+
+@_jit
+def _huber(x):
+    ax = abs(x)
+    return 0.5 * ax * ax if ax <= 1.0 else ax - 0.5
+
+
+@_jit
+def _capped(e):
+    return min(e, _ERROR_CAP_M) if math.isfinite(e) else _ERROR_CAP_M
+
+
+@_jit
+def reward_formation(w, error, previous_error, action, previous_action, saving, separation, collided, crashed,
+                     remaining_decisions, out):
+    """Reward terms (V, 8) in :data:`REWARD_TERMS` order of one formation (the definition:
+    :class:`formation_env.envs.config.RewardWeights`). error, previous_error (V,) m; separation (V,)
+    m to the nearest UAV; collided bool; crashed (V,) bool; remaining_decisions until the time limit."""
+    d_safe = w.barrier_separation_m
+    for a in range(error.shape[0]):
+        err, prev = _capped(error[a]), _capped(previous_error[a])
+        cost, cost_prev = _huber(err / w.slot_scale_m), _huber(prev / w.slot_scale_m)
+        sep = separation[a]
+        if sep != sep:
+            sep = 0.0
+        depth = min(1.0, max(0.0, (d_safe - sep) / max(d_safe - w.collision_separation_m, 1e-9)))
+        forfeit = w.terminal_forfeit * w.slot * _huber(min(prev, _TERMINAL_ERROR_CAP_M) / w.slot_scale_m) * remaining_decisions
+        effort = 0.0
+        rate = 0.0
+        for k in range(4):
+            effort += action[a, k] * action[a, k]
+            rate += (action[a, k] - previous_action[a, k]) ** 2
+        out[a, 0] = -w.slot * cost
+        out[a, 1] = w.progress * (cost_prev - w.shaping_gamma * cost)  # gamma Phi(s') - Phi(s), Phi = -cost
+        out[a, 2] = -w.separation * depth * depth
+        out[a, 3] = -w.effort * effort / 4.0
+        out[a, 4] = -w.rate * rate / 4.0
+        out[a, 5] = w.benefit * saving[a] if math.isfinite(saving[a]) else 0.0
+        out[a, 6] = -(w.collision + forfeit) if collided else 0.0
+        out[a, 7] = -(w.crash + forfeit) if crashed[a] else 0.0

@@ -1,0 +1,80 @@
+"""The state of B formations as arrays (:class:`SimState`) and the per-decision outputs
+(:class:`StepOutput`): everything that carries physics between calls of
+:func:`formation_env.sim.step.step` lives here, nothing in hidden attributes.
+
+Shapes: B formations, V vehicles, N ELL panels (all vehicles), R turbulence ring slots, D the
+observation size. Frames: NED earth, body x forward / y starboard / z down.
+"""
+
+from __future__ import annotations
+
+from typing import NamedTuple
+
+import numpy as np
+
+from ..aircraft.state import N_STATES
+from ..atmosphere.frozen_field import FrozenFieldState, frozen_field_init
+from ..control.law import N_CSTATE
+from .observe import REWARD_TERMS
+
+__all__ = ["SimState", "StepOutput", "init_state", "init_output", "copy_state"]
+
+
+class SimState(NamedTuple):
+    aircraft: np.ndarray  # (B, V, 16) Aerosonde states (formation_env.aircraft.state layout)
+    controller: np.ndarray  # (B, V, 7) PID integrators and washout (formation_env.control.CSTATE_NAMES)
+    command: np.ndarray  # (B, V, 4) controls of the last physics step: elevator, aileron, rudder rad, throttle
+    step: np.ndarray  # (B,) int64 physics steps flown this episode
+    induced_wind_ned: np.ndarray  # (B, V, 3) ELL effective induced wind held for the step, m/s NED
+    induced_omega_body: np.ndarray  # (B, V, 3) ELL effective rotational wind, rad/s body
+    circulation: np.ndarray  # (B, N) ELL circulation of the latest solve, m^2/s
+    position_demand: np.ndarray  # (B, V, 3) demanded positions at the current state and time, m NED
+    velocity_demand: np.ndarray  # (B, V, 3) demanded velocities, m/s NED
+    slot_jitter: np.ndarray  # (B, V, 3) per-episode slot offset jitter, m, track frame
+    steady_wind: np.ndarray  # (B, 3) per-episode steady wind, m/s NED
+    manoeuvre: np.ndarray  # (B, 4) leader manoeuvre: start s, heading change rad, altitude change m, speed change m/s
+    reference_position: np.ndarray  # (B, 3) integrated manoeuvring reference path position, m NED
+    gust_ned: np.ndarray  # (B, V, 3) turbulence at each UAV now, m/s NED
+    field: FrozenFieldState  # the formation's turbulence field (frozen or independent lanes)
+    status: np.ndarray  # (B, V) int64 envelope status bits after the last physics step
+    previous_action: np.ndarray  # (B, V, 4) the agent's action of the last decision (0 for PID-flown UAVs)
+    previous_error: np.ndarray  # (B, V) distance from the slot at the last decision, m
+
+
+class StepOutput(NamedTuple):
+    """What one decision returns, for every vehicle (agents are selected by the adapters)."""
+
+    observation: np.ndarray  # (B, V, D) float64
+    reward: np.ndarray  # (B, V) total reward
+    reward_terms: np.ndarray  # (B, V, 8) in formation_env.sim.observe.REWARD_TERMS order
+    terminated: np.ndarray  # (B,) bool: collision or a UAV left the envelope
+    truncated: np.ndarray  # (B,) bool: time limit reached (and not terminated)
+    collided: np.ndarray  # (B,) bool: two CGs came closer than the collision separation
+    crashed: np.ndarray  # (B, V) bool: the UAV left the envelope (or diverged) during the decision
+    slot_error_m: np.ndarray  # (B, V) distance from the slot now
+    separation_m: np.ndarray  # (B, V) distance to the nearest other UAV now
+    min_separation_m: np.ndarray  # (B,) smallest CG separation seen during the decision
+    saving: np.ndarray  # (B, V) induced-drag saving now (0 unless the benefit is on)
+
+
+def init_state(batch_size: int, n_vehicles: int, n_panels: int, field_params) -> SimState:
+    b, v = batch_size, n_vehicles
+    z3 = lambda: np.zeros((b, v, 3))  # noqa: E731
+    return SimState(np.zeros((b, v, N_STATES)), np.zeros((b, v, N_CSTATE)), np.zeros((b, v, 4)),
+                    np.zeros(b, dtype=np.int64), z3(), z3(), np.zeros((b, max(n_panels, 1))), z3(), z3(), z3(),
+                    np.zeros((b, 3)), np.zeros((b, 4)), np.zeros((b, 3)), z3(), frozen_field_init(field_params, b, v),
+                    np.zeros((b, v), dtype=np.int64), np.zeros((b, v, 4)), np.zeros((b, v)))
+
+
+def init_output(batch_size: int, n_vehicles: int, obs_size: int) -> StepOutput:
+    b, v = batch_size, n_vehicles
+    return StepOutput(np.zeros((b, v, obs_size)), np.zeros((b, v)), np.zeros((b, v, len(REWARD_TERMS))),
+                      np.zeros(b, dtype=np.bool_), np.zeros(b, dtype=np.bool_), np.zeros(b, dtype=np.bool_),
+                      np.zeros((b, v), dtype=np.bool_), np.zeros((b, v)), np.zeros((b, v)), np.full(b, np.inf),
+                      np.zeros((b, v)))
+
+
+def copy_state(state: SimState) -> SimState:
+    """A deep copy (the step updates its state in place, for speed)."""
+    return SimState(*[FrozenFieldState(*[a.copy() for a in x]) if isinstance(x, FrozenFieldState) else x.copy()
+                      for x in state])

@@ -1,0 +1,355 @@
+"""One compiled, batched decision step: ``step(params, state, actions) -> StepOutput``.
+
+Per formation (B formations over a thread pool) and per physics substep, in this order (thesis chapter 6's
+loop, the Simulink model's order):
+
+1. guidance: vehicle 0's reference path and the followers' slot demands (:mod:`.guidance`);
+2. ambient wind: scenario gusts + steady wind + the turbulence at each UAV (sampled at its
+   position at the end of the previous substep);
+3. control: the thesis PID (:func:`formation_env.control.law.fcs_update`) for every UAV it flies,
+   with the agents' actions mapped per mode: ``setpoints`` moves the PID's demands, ``residual`` adds
+   to its command, ``surfaces`` replaces it;
+4. ELL effective wind every ``wake_update_every``-th substep (Eqs. 4.4-4.7), Aerosonde RK4 and
+   the envelope (:func:`formation_env.sim.kernels.step_one`);
+5. turbulence field advanced one step and sampled at the new positions.
+
+A formation stops its substeps as soon as a UAV leaves the envelope (its episode ends). Then the
+demands at the new state, the observation, the formation benefit and the reward are formed
+(:mod:`.observe`). The state is updated in place and nothing else is kept between calls
+(:func:`formation_env.sim.state.copy_state` gives functional semantics when needed).
+
+Threads: the kernel releases the GIL and a small pool (``numba.get_num_threads()`` threads, so
+``NUMBA_NUM_THREADS`` applies) takes chunks of formations from a queue, one parallel region per
+decision. numba's ``prange`` cannot take these named structs of arrays, and its OpenMP barrier is
+what collapsed under a busy core (25x at B = 16); with a queue, a thread on a busy core simply takes
+fewer chunks.
+"""
+
+from __future__ import annotations
+
+import math
+from concurrent.futures import ThreadPoolExecutor
+
+import numba as nb
+import numpy as np
+
+from ..aircraft.kernels import _air
+from ..atmosphere.frozen_field import _advance_one, _sample_one, N_STREAMS_PER_LANE
+from ..control.law import fcs_update
+from ..frames import quaternion_dcm_terms
+from .guidance import formation_demands, gust_wind_ned, reference_path, schedule_features
+from ..wake.benefit import induced_drag_saving_one
+from ..wake.kernels import evaluate_one
+from .kernels import ell_inputs, min_separation, step_one
+from .observe import observe_formation, min_separation_each, reward_formation
+from .params import RESIDUAL, SETPOINTS, SURFACES, StepParams
+from .state import SimState, StepOutput
+
+__all__ = ["step", "refresh", "observe", "PARALLEL_MIN_BATCH"]
+
+PARALLEL_MIN_BATCH = 2  # a single formation runs serially (no thread start-up)
+
+
+@nb.njit(cache=True, error_model="numpy")
+def _velocity_ned(x, out):
+    for a in range(x.shape[0]):
+        xa = x[a]
+        r00, r01, r02, r10, r11, r12, r20, r21, r22 = quaternion_dcm_terms(xa[6], xa[7], xa[8], xa[9])
+        out[a, 0] = r00 * xa[0] + r01 * xa[1] + r02 * xa[2]
+        out[a, 1] = r10 * xa[0] + r11 * xa[1] + r12 * xa[2]
+        out[a, 2] = r20 * xa[0] + r21 * xa[1] + r22 * xa[2]
+
+
+@nb.njit(cache=True, error_model="numpy")
+def _sample_turbulence(p, s, b, scratch_n, out):
+    """Turbulence (V, 3) NED at each UAV of formation b now: the frozen field read at the UAVs'
+    positions (cross-correlated, transport-delayed), or independent lanes (each UAV its own stream,
+    no delay). Non-finite values (a diverged UAV, episode ending) read as 0."""
+    nv = out.shape[0]
+    chi = math.atan2(s.velocity_demand[b, 0, 1], s.velocity_demand[b, 0, 0])
+    if not math.isfinite(chi):
+        chi = 0.0
+    if p.turbulence == 1:
+        pos = s.aircraft[:, :, 10:13]
+        _sample_one(p.field, s.field, b, pos, chi, s.gust_ned, np.empty(nv), np.empty(nv), np.empty(nv),
+                    np.empty(nv, dtype=np.int64), np.empty(nv, dtype=np.int64), np.empty(nv), np.empty((nv, nv)),
+                    np.empty((nv, nv)), np.empty((nv, 3)))
+    else:
+        head = s.field.head[b]
+        cs, sn = math.cos(chi), math.sin(chi)
+        for i in range(nv):
+            u = p.field.sigma_mps[0] * s.field.ring[b, head, 0, i]
+            v = p.field.sigma_mps[1] * s.field.ring[b, head, 1, i]
+            s.gust_ned[b, i, 0] = cs * u - sn * v
+            s.gust_ned[b, i, 1] = sn * u + cs * v
+            s.gust_ned[b, i, 2] = p.field.sigma_mps[2] * s.field.ring[b, head, 2, i]
+    for i in range(nv):
+        for k in range(3):
+            if not math.isfinite(s.gust_ned[b, i, k]):
+                s.gust_ned[b, i, k] = 0.0
+
+
+@nb.njit(cache=True, error_model="numpy")
+def _ambient(p, s, b, t, out):
+    """Ambient wind (V, 3) NED m/s: scenario gusts + steady wind + turbulence at each UAV."""
+    g = np.empty(3)
+    gust_wind_ned(p.scenario, t, g)
+    for a in range(out.shape[0]):
+        for k in range(3):
+            out[a, k] = g[k] + s.steady_wind[b, k] + s.gust_ned[b, a, k]
+
+
+@nb.njit(cache=True, error_model="numpy")
+def _control(p, s, b, actions, amb, vel, cmd):
+    """Commands (V, 4) of formation b: the PID (with setpoint-shifted demands) and the agents."""
+    ap = p.action
+    wind = np.zeros(12)
+    pd = np.empty(3)
+    vd = np.empty(3)
+    rate = np.empty(s.controller.shape[2])
+    sig = np.empty(10)
+    for a in range(cmd.shape[0]):
+        agent = ap.agent_mask[a]
+        if agent and ap.mode == SURFACES:
+            for k in range(4):
+                cmd[a, k] = min(max(ap.trim_controls[k] + actions[a, k] * ap.surface_scale[k], ap.command_min[k]),
+                                ap.command_max[k])
+            continue
+        x = s.aircraft[b, a]
+        for k in range(3):
+            pd[k] = s.position_demand[b, a, k]
+            vd[k] = s.velocity_demand[b, a, k]
+        if agent and ap.mode == SETPOINTS:
+            # shift the demands in the slot frame (along the demanded track, starboard, down)
+            chi = math.atan2(vd[1], vd[0])
+            c, sn = math.cos(chi), math.sin(chi)
+            dx, dy = actions[a, 0] * ap.setpoint_position_m, actions[a, 1] * ap.setpoint_position_m
+            pd[0] += c * dx - sn * dy
+            pd[1] += sn * dx + c * dy
+            pd[2] += actions[a, 2] * ap.setpoint_position_m
+            speed = math.sqrt(vd[0] * vd[0] + vd[1] * vd[1] + vd[2] * vd[2])
+            f = actions[a, 3] * ap.setpoint_speed_mps / max(speed, 1e-9)
+            for k in range(3):
+                vd[k] += vd[k] * f
+        for k in range(3):
+            wind[k] = amb[a, k]
+            wind[6 + k] = s.induced_wind_ned[b, a, k]
+        airspeed = _air(x, wind, p.aircraft.scalars)[0]
+        e0, ex, ey, ez = x[6], x[7], x[8], x[9]
+        n2 = e0 * e0 + ex * ex + ey * ey + ez * ez
+        phi = math.atan2(2.0 * (e0 * ex + ey * ez), e0 * e0 - ex * ex - ey * ey + ez * ez)
+        theta = math.asin(min(1.0, max(-1.0, 2.0 * (e0 * ey - ex * ez) / n2)))
+        psi = math.atan2(2.0 * (ex * ey + e0 * ez), e0 * e0 + ex * ex - ey * ey - ez * ez)
+        fcs_update(x[10:13], vel[a], phi, theta, psi, x[4], x[5], airspeed, pd, vd, s.controller[b, a], p.fcs,
+                   cmd[a], rate, sig)
+        if agent and ap.mode == RESIDUAL:
+            for k in range(4):
+                cmd[a, k] = min(max(cmd[a, k] + actions[a, k] * ap.residual_scale[k], ap.command_min[k]),
+                                ap.command_max[k])
+
+
+@nb.njit(cache=True, error_model="numpy")
+def _physics(p, s, b, cmd, amb, new_state, status):
+    """ELL (when due) -> RK4 -> envelope of formation b, one dt (formation_env.sim.kernels.step_one)."""
+    w, ac = p.wake, p.aircraft
+    update = s.step[b] % p.wake_update_every == 0
+    step_one(s.aircraft[b], cmd, amb, np.zeros_like(amb), s.induced_wind_ned[b], s.induced_omega_body[b],
+             s.circulation[b], update, p.wake_on, w.wing_origin_body, w.knot_x1_b, w.knot_x3_b, w.knot_vehicle,
+             w.knot_surface, w.surface_origin_b, w.surface_vehicle, w.surface_knot_start, w.surface_panel_start,
+             w.surface_core_scale, w.panel_left_knot, w.panel_vehicle, w.control_b, w.normal_b, w.aic_static, w.eval_b,
+             w.grad_w, w.vehicle_panel_start, w.cutoff_m, w.core_mode, w.aic_core_mode, w.kinematic_viscosity,
+             p.dt_s, ac.scalars, ac.prop_J, ac.prop_CT, ac.prop_CP, ac.engine_rpm, ac.engine_map, ac.engine_power,
+             ac.engine_fuel, ac.atm_T, ac.atm_P, ac.atm_rho, ac.atm_a, ac.limits, new_state, status)
+
+
+@nb.njit(cache=True, error_model="numpy")
+def formation_benefit(p, s, b, amb, out_saving):
+    """Induced-drag saving (V,) of formation b at its current state: one ELL solve at the current
+    poses (relative to the ambient air), then Kutta-Joukowski drag against each UAV flying alone
+    (:func:`formation_env.wake.benefit.induced_drag_saving_one`). Zero for a formation with a
+    non-finite UAV (its episode is ending)."""
+    nv = s.aircraft.shape[1]
+    for a in range(nv):
+        out_saving[a] = 0.0
+        for k in range(s.aircraft.shape[2]):
+            if not math.isfinite(s.aircraft[b, a, k]):
+                return
+    w = p.wake
+    pos, euler = np.empty((nv, 3)), np.empty((nv, 3))
+    speed, alpha, beta = np.empty(nv), np.empty(nv), np.empty(nv)
+    ell_inputs(s.aircraft[b], amb, w.wing_origin_body, pos, euler, speed, alpha, beta)
+    gamma = np.empty(w.panel_left_knot.shape[0])
+    evaluate_one(pos, euler, speed, alpha, beta, w.knot_x1_b, w.knot_x3_b, w.knot_vehicle, w.knot_surface,
+                 w.surface_origin_b, w.surface_vehicle, w.surface_knot_start, w.surface_panel_start,
+                 w.surface_core_scale, w.panel_left_knot, w.panel_vehicle, w.control_b, w.normal_b, w.aic_static,
+                 w.eval_b, w.grad_w, w.vehicle_panel_start, w.cutoff_m, w.core_mode, w.aic_core_mode,
+                 w.kinematic_viscosity, gamma, np.empty((gamma.shape[0], 3)), np.empty((nv, 3)), np.empty((nv, 3)),
+                 np.empty((nv, 3)), np.empty((nv, 3)))
+    induced_drag_saving_one(w, p.wake_alone, pos, euler, speed, alpha, beta, gamma, out_saving)
+
+
+@nb.njit(cache=True, error_model="numpy")
+def refresh_formation(p, s, b):
+    """Demands and turbulence of formation b at its current state and time (after a reset)."""
+    nv = s.aircraft.shape[1]
+    vel = np.empty((nv, 3))
+    _velocity_ned(s.aircraft[b], vel)
+    formation_demands(p.scenario, s.step[b] * p.dt_s, s.aircraft[b], vel, s.reference_position[b], s.manoeuvre[b],
+                      s.slot_jitter[b], s.position_demand[b], s.velocity_demand[b])
+    if p.turbulence != 0:
+        _sample_turbulence(p, s, b, np.empty(N_STREAMS_PER_LANE), s.gust_ned[b])
+
+
+@nb.njit(cache=True, error_model="numpy")
+def observe_one(p, s, b, out_obs):
+    """Observation rows (V, D) of formation b at its current state."""
+    nv = s.aircraft.shape[1]
+    amb = np.empty((nv, 3))
+    _ambient(p, s, b, s.step[b] * p.dt_s, amb)
+    sched = np.empty((nv, 10))
+    schedule_features(p.scenario, s.step[b] * p.dt_s, s.slot_jitter[b], sched)
+    observe_formation(s.aircraft[b], s.induced_wind_ned[b], s.induced_omega_body[b], amb, s.position_demand[b],
+                      s.velocity_demand[b], s.previous_action[b], sched, s.controller[b], p.trim_airspeed_mps,
+                      p.scenario.altitude_m, p.aircraft.scalars, np.empty((nv, 3)), np.empty(nv), out_obs)
+
+
+@nb.njit(cache=True, error_model="numpy")
+def decide_one(p, s, b, actions, o):
+    """One decision of formation b: substeps, then observation, reward and events into ``o``."""
+    nv = s.aircraft.shape[1]
+    amb = np.empty((nv, 3))
+    vel = np.empty((nv, 3))
+    cmd = np.empty((nv, 4))
+    new = np.empty((nv, s.aircraft.shape[2]))
+    status = np.zeros(nv, dtype=np.int64)
+    scratch_n = np.empty(N_STREAMS_PER_LANE)
+    status_any = np.zeros(nv, dtype=np.int64)
+    min_sep = np.inf
+    for _ in range(p.substeps):
+        t = s.step[b] * p.dt_s
+        _velocity_ned(s.aircraft[b], vel)
+        formation_demands(p.scenario, t, s.aircraft[b], vel, s.reference_position[b], s.manoeuvre[b],
+                          s.slot_jitter[b], s.position_demand[b], s.velocity_demand[b])
+        _ambient(p, s, b, t, amb)
+        _control(p, s, b, actions, amb, vel, cmd)
+        _physics(p, s, b, cmd, amb, new, status)
+        s.aircraft[b] = new
+        s.command[b] = cmd
+        for a in range(nv):
+            s.status[b, a] = status[a]
+            status_any[a] |= status[a]
+        if p.turbulence != 0:
+            _advance_one(p.field, s.field, b, scratch_n)
+            _sample_turbulence(p, s, b, scratch_n, s.gust_ned[b])
+        if p.scenario.manoeuvres:  # the manoeuvring reference integrates on the physics grid
+            rp, rv = np.empty(3), np.empty(3)
+            reference_path(p.scenario, t, s.reference_position[b], s.manoeuvre[b], rp, rv)
+            for k in range(3):
+                s.reference_position[b, k] += p.dt_s * rv[k]
+        s.step[b] += 1
+        d = min_separation(s.aircraft[b])
+        if d < min_sep or d != d:
+            min_sep = d
+        stop = False
+        for a in range(nv):
+            if status_any[a] != 0:
+                stop = True
+        if stop or d < p.reward.collision_separation_m or d != d:
+            break
+    # the demands at the new state: what the observation and the reward measure against
+    _velocity_ned(s.aircraft[b], vel)
+    formation_demands(p.scenario, s.step[b] * p.dt_s, s.aircraft[b], vel, s.reference_position[b], s.manoeuvre[b],
+                      s.slot_jitter[b], s.position_demand[b], s.velocity_demand[b])
+    collided = min_sep < p.reward.collision_separation_m
+    crashed_any = False
+    for a in range(nv):
+        o.crashed[b, a] = status_any[a] != 0
+        crashed_any = crashed_any or status_any[a] != 0
+        dx = s.aircraft[b, a, 10] - s.position_demand[b, a, 0]
+        dy = s.aircraft[b, a, 11] - s.position_demand[b, a, 1]
+        dz = s.aircraft[b, a, 12] - s.position_demand[b, a, 2]
+        o.slot_error_m[b, a] = math.sqrt(dx * dx + dy * dy + dz * dz)
+    min_separation_each(s.aircraft[b], o.separation_m[b])
+    o.collided[b] = collided
+    o.min_separation_m[b] = min_sep
+    o.terminated[b] = collided or crashed_any
+    o.truncated[b] = (not o.terminated[b]) and s.step[b] >= p.episode_steps
+    if p.benefit_on:
+        _ambient(p, s, b, s.step[b] * p.dt_s, amb)
+        formation_benefit(p, s, b, amb, o.saving[b])
+    remaining = max(p.episode_steps - s.step[b], 0) / p.substeps
+    reward_formation(p.reward, o.slot_error_m[b], s.previous_error[b], actions, s.previous_action[b], o.saving[b],
+                     o.separation_m[b], collided, o.crashed[b], remaining, o.reward_terms[b])
+    for a in range(nv):
+        total = 0.0
+        for k in range(o.reward_terms.shape[2]):
+            total += o.reward_terms[b, a, k]
+        o.reward[b, a] = total
+        s.previous_error[b, a] = o.slot_error_m[b, a]
+        for k in range(4):
+            s.previous_action[b, a, k] = actions[a, k]
+    observe_one(p, s, b, o.observation[b])
+
+
+@nb.njit(cache=True, nogil=True, error_model="numpy")
+def decide_range(p, s, actions, o, start, stop):
+    """:func:`decide_one` for formations start..stop-1 (releases the GIL: threads run chunks)."""
+    for b in range(start, stop):
+        decide_one(p, s, b, actions[b], o)
+
+
+@nb.njit(cache=True, nogil=True, error_model="numpy")
+def refresh_range(p, s, indices, observation, start, stop):
+    """:func:`refresh_formation` and :func:`observe_one` for indices[start:stop]."""
+    for q in range(start, stop):
+        b = indices[q]
+        refresh_formation(p, s, b)
+        observe_one(p, s, b, observation[b])
+
+
+_POOL: ThreadPoolExecutor | None = None
+_POOL_SIZE = 0
+
+
+def _threads() -> int:
+    return max(1, int(nb.get_num_threads()))
+
+
+def _run_chunks(kernel, n: int, args: tuple) -> None:
+    """Run ``kernel(*args, start, stop)`` over 0..n in chunks on a thread pool. Chunks are small
+    (about four per thread) and taken from a queue, so a thread on a busy core takes fewer of them:
+    throughput degrades in proportion to the CPU taken away instead of collapsing at a barrier."""
+    global _POOL, _POOL_SIZE
+    threads = _threads()
+    if threads == 1 or n < PARALLEL_MIN_BATCH:
+        kernel(*args, 0, n)
+        return
+    if _POOL is None or _POOL_SIZE != threads:
+        if _POOL is not None:
+            _POOL.shutdown(wait=False)
+        _POOL, _POOL_SIZE = ThreadPoolExecutor(threads, thread_name_prefix="formation-step"), threads
+    chunk = max(1, -(-n // (4 * threads)))
+    futures = [_POOL.submit(kernel, *args, a, min(a + chunk, n)) for a in range(chunk, n, chunk)]
+    kernel(*args, 0, min(chunk, n))  # the calling thread works too
+    for f in futures:
+        f.result()
+
+
+def step(params: StepParams, state: SimState, actions: np.ndarray, out: StepOutput) -> StepOutput:
+    """Advance every formation by one decision with ``actions`` (B, V, 4) in [-1, 1] (rows of
+    PID-flown vehicles are ignored); results into ``out`` (returned). Inputs are not checked here:
+    the env adapters validate once per decision."""
+    _run_chunks(decide_range, actions.shape[0], (params, state, actions, out))
+    return out
+
+
+def refresh(params: StepParams, state: SimState, indices: np.ndarray, out: StepOutput) -> None:
+    """After resetting formations ``indices``: their demands, turbulence sample and observation."""
+    _run_chunks(refresh_range, indices.shape[0], (params, state, np.ascontiguousarray(indices, dtype=np.int64),
+                                                  out.observation))
+
+
+def observe(params: StepParams, state: SimState, out: StepOutput) -> np.ndarray:
+    """Recompute every formation's observation at its current state into ``out.observation``."""
+    refresh(params, state, np.arange(state.step.shape[0]), out)
+    return out.observation

@@ -1,0 +1,139 @@
+"""Compiled joint solve of the ELL (thesis section 4.3.6, Eqs. 4.23-4.69): the aerodynamic influence
+coefficient (AIC) matrix of every panel of every vehicle and the circulations from the flow-tangency
+condition, by Gaussian elimination with partial pivoting."""
+
+from __future__ import annotations
+
+import numba as nb
+import numpy as np
+
+from .biot_savart import CORE_NONE, branch, core_radius, leg, point_to_knots
+from .posing import branch_directions, to_ned
+
+__all__ = ["lu_solve_inplace", "static_aic", "assemble_and_solve"]
+
+_jit = nb.njit(cache=True, fastmath=False, error_model="numpy")
+
+
+@_jit
+def lu_solve_inplace(a, rhs):
+    """Solve a x = rhs by Gaussian elimination with partial pivoting (a and rhs are overwritten;
+    x is returned in rhs). The AIC is small and dense, so this beats a LAPACK call's overhead."""
+    n = a.shape[0]
+    for k in range(n):
+        p = k
+        best = abs(a[k, k])
+        for i in range(k + 1, n):
+            v = abs(a[i, k])
+            if v > best:
+                best = v
+                p = i
+        if p != k:
+            for j in range(n):
+                tmp = a[k, j]
+                a[k, j] = a[p, j]
+                a[p, j] = tmp
+            tmp = rhs[k]
+            rhs[k] = rhs[p]
+            rhs[p] = tmp
+        piv = a[k, k]
+        if piv == 0.0:
+            piv = 1e-300  # singular (degenerate geometry): stay finite rather than divide by zero
+            a[k, k] = piv
+        for i in range(k + 1, n):
+            m = a[i, k] / piv
+            if m != 0.0:
+                for j in range(k + 1, n):
+                    a[i, j] -= m * a[k, j]
+                rhs[i] -= m * rhs[k]
+    for k in range(n - 1, -1, -1):
+        s = rhs[k]
+        for j in range(k + 1, n):
+            s -= a[k, j] * rhs[j]
+        rhs[k] = s / a[k, k]
+
+
+@_jit
+def static_aic(knot_x1_b, knot_x3_b, knot_vehicle, knot_surface, surface_knot_start, panel_left_knot, panel_vehicle,
+               control_b, normal_b, cutoff):
+    """The part of the AIC that a rigid vehicle's own bound and chordwise branches contribute to its
+    own control points: constant in body axes (only the trailing legs follow alpha and beta), so
+    it is computed once per make-up. Entries between different vehicles are zero."""
+    n_panels = panel_left_knot.shape[0]
+    n_knots = knot_x1_b.shape[0]
+    out = np.zeros((n_panels, n_panels))
+    bound_dir = np.empty((n_knots, 3))
+    chord_dir = np.empty((n_knots, 3))
+    branch_directions(knot_x1_b, knot_x3_b, knot_surface, surface_knot_start, bound_dir, chord_dir)
+    r1 = np.empty((n_knots, 3))
+    r3 = np.empty((n_knots, 3))
+    inv1 = np.empty(n_knots)
+    inv3 = np.empty(n_knots)
+    cw = np.empty(n_knots)
+    for j in range(n_panels):
+        vj = panel_vehicle[j]
+        c = control_b[j]
+        n = normal_b[j]
+        point_to_knots(c[0], c[1], c[2], knot_x1_b, knot_x3_b, 0, n_knots, r1, inv1, r3, inv3)
+        for k in range(n_knots):
+            sx, sy, sz = branch(chord_dir[k, 0], chord_dir[k, 1], chord_dir[k, 2], r3[k, 0], r3[k, 1], r3[k, 2], inv3[k],
+                                r1[k, 0], r1[k, 1], r1[k, 2], inv1[k], cutoff)
+            cw[k] = sx * n[0] + sy * n[1] + sz * n[2]
+        for p in range(n_panels):
+            if panel_vehicle[p] != vj:
+                continue
+            k = panel_left_knot[p]
+            bx, by, bz = branch(bound_dir[k, 0], bound_dir[k, 1], bound_dir[k, 2], r1[k, 0], r1[k, 1], r1[k, 2], inv1[k],
+                                r1[k + 1, 0], r1[k + 1, 1], r1[k + 1, 2], inv1[k + 1], cutoff)
+            out[j, p] = cw[k] + bx * n[0] + by * n[1] + bz * n[2] - cw[k + 1]
+    return out
+
+
+@_jit
+def assemble_and_solve(
+    x1, x3, bound_dir, chord_dir, trail, vel, rot, pos, origin, airspeed,
+    knot_vehicle, knot_surface, surface_core_scale, panel_left_knot, panel_vehicle,
+    control_b, normal_b, aic_static, cutoff, aic_core_mode, nu, aic, gamma, r1, inv1, r3, inv3,
+):
+    """Build the AIC over every panel of every vehicle and solve for the circulations (4.25-4.69).
+
+    Boundary condition (V_induced + V_inf) . n = 0 with V_inf = -V_vehicle: A G = V_vehicle . n.
+    All branches use the plain Biot-Savart law with the Eq. 4.31 cutoff (the thesis), except that
+    ``aic_core_mode`` != CORE_NONE gives the *other* vehicles' trailing legs the viscous core of the
+    field law, so that a leg passing a control point does not produce a near-singular response.
+    A vehicle's own bound and chordwise branches come from ``aic_static`` (see :func:`static_aic`).
+    """
+    n_panels = panel_left_knot.shape[0]
+    n_knots = x1.shape[0]
+    cp = np.empty(3)
+    nrm = np.empty(3)
+    lw = np.empty(n_knots)  # trailing leg . n
+    cw = np.empty(n_knots)  # chordwise branch . n (other vehicles' knots only)
+    for j in range(n_panels):
+        vj = panel_vehicle[j]
+        to_ned(rot[vj], pos[vj], control_b[j], cp)
+        for i in range(3):
+            nrm[i] = rot[vj, 0, i] * normal_b[j, 0] + rot[vj, 1, i] * normal_b[j, 1] + rot[vj, 2, i] * normal_b[j, 2]
+        point_to_knots(cp[0], cp[1], cp[2], x1, x3, 0, n_knots, r1, inv1, r3, inv3)
+        for k in range(n_knots):
+            src = knot_vehicle[k]
+            t = trail[src]
+            rc = 0.0
+            if aic_core_mode != CORE_NONE and src != vj:
+                rc = core_radius(cp[0], cp[1], cp[2], origin, knot_surface[k], airspeed[src], surface_core_scale, aic_core_mode, nu)
+            lx, ly, lz = leg(t[0], t[1], t[2], r3[k, 0], r3[k, 1], r3[k, 2], inv3[k], cutoff, rc)
+            lw[k] = lx * nrm[0] + ly * nrm[1] + lz * nrm[2]
+            if src != vj:
+                sx, sy, sz = branch(chord_dir[k, 0], chord_dir[k, 1], chord_dir[k, 2], r3[k, 0], r3[k, 1], r3[k, 2],
+                                    inv3[k], r1[k, 0], r1[k, 1], r1[k, 2], inv1[k], cutoff)
+                cw[k] = sx * nrm[0] + sy * nrm[1] + sz * nrm[2]
+        for p in range(n_panels):
+            k = panel_left_knot[p]
+            if panel_vehicle[p] == vj:
+                aic[j, p] = aic_static[j, p] - lw[k] + lw[k + 1]
+            else:
+                bx, by, bz = branch(bound_dir[k, 0], bound_dir[k, 1], bound_dir[k, 2], r1[k, 0], r1[k, 1], r1[k, 2],
+                                    inv1[k], r1[k + 1, 0], r1[k + 1, 1], r1[k + 1, 2], inv1[k + 1], cutoff)
+                aic[j, p] = (cw[k] - lw[k]) + bx * nrm[0] + by * nrm[1] + bz * nrm[2] - (cw[k + 1] - lw[k + 1])
+        gamma[j] = vel[vj, 0] * nrm[0] + vel[vj, 1] * nrm[1] + vel[vj, 2] * nrm[2]
+    lu_solve_inplace(aic, gamma)

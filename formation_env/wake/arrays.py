@@ -1,0 +1,54 @@
+"""The ELL lattice of a :class:`~formation_env.wake.WakeModel` as one named struct of arrays, the
+form compiled kernels take (instead of 21 positional arguments)."""
+
+from __future__ import annotations
+
+from typing import NamedTuple
+
+import numpy as np
+
+from .kernels import CORE_NONE
+
+__all__ = ["WakeArrays", "wake_arrays"]
+
+
+class WakeArrays(NamedTuple):
+    """The ELL lattice of the formation (:class:`formation_env.wake.WakeModel`) as arrays."""
+
+    knot_x1_b: np.ndarray
+    knot_x3_b: np.ndarray
+    knot_vehicle: np.ndarray
+    knot_surface: np.ndarray
+    surface_origin_b: np.ndarray
+    surface_vehicle: np.ndarray
+    surface_knot_start: np.ndarray
+    surface_panel_start: np.ndarray
+    surface_core_scale: np.ndarray
+    panel_left_knot: np.ndarray
+    panel_vehicle: np.ndarray
+    control_b: np.ndarray
+    normal_b: np.ndarray
+    aic_static: np.ndarray
+    eval_b: np.ndarray
+    grad_w: np.ndarray
+    vehicle_panel_start: np.ndarray
+    cutoff_m: float
+    core_mode: int
+    aic_core_mode: int
+    kinematic_viscosity: float
+    wing_origin_body: np.ndarray  # (3,) wing root quarter chord relative to the CG, body axes, m
+    n_panels: int
+
+
+
+def wake_arrays(model, wing_origin_body) -> WakeArrays:
+    """The struct of ``model`` (a WakeModel) with the wing origin relative to the CG (body axes, m)."""
+    t = model.template
+    return WakeArrays(t.knot_x1_b, t.knot_x3_b, t.knot_vehicle, t.knot_surface, t.surface_origin_b, t.surface_vehicle,
+                      t.surface_knot_start, t.surface_panel_start, t.surface_core_scale, t.panel_left_knot,
+                      t.panel_vehicle, t.control_b, t.normal_b, model.aic_static, model.eval_b, model.grad_w,
+                      t.vehicle_panel_start, float(t.cutoff_m), int(model._core_mode),
+                      int(model._core_mode if model.viscous_aic else CORE_NONE), float(model.kinematic_viscosity),
+                      np.ascontiguousarray(wing_origin_body, dtype=float), int(model.n_panels))
+
+

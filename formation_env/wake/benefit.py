@@ -1,0 +1,179 @@
+"""Compiled induced drag and the formation benefit (induced-drag saving) of ONE formation.
+
+The same Kutta-Joukowski loads as :func:`formation_env.wake.loads.vehicle_loads` /
+:func:`~formation_env.wake.loads.formation_benefit`, for one formation at a time inside compiled
+code (the env's decision step calls it in its ``nogil`` loop): F_k = rho Gamma_k (V_rel,k x l_k)
+at each bound vortex's midpoint, V_rel = -V_vehicle + (own horseshoes, plain Biot-Savart with the
+Eq. 4.31 cutoff) + (other vehicles' horseshoes, field law with the viscous core); the induced drag
+is minus the wind-axis x component of the vehicle's summed force. The saving is
+``1 - D_i(formation) / D_i(alone)`` (0 where ``D_i(alone)`` is 0), the isolated drag coming from a
+single-vehicle solve at the same pose and air data.
+
+It composes the existing kernels (:func:`~formation_env.wake.kernels.posed_lattice`,
+:func:`~formation_env.wake.kernels.field_velocity`, :func:`~formation_env.wake.kernels.evaluate_one`);
+no Biot-Savart law is repeated here.
+
+The lattice comes as a ``WakeArrays`` NamedTuple (:func:`formation_env.wake.arrays.wake_arrays`, which
+re-exports :mod:`formation_env.wake.arrays`); ``wake_alone`` is that of ``WakeModel([vehicle])``
+with the formation model's options (``core``, ``eval_points``, ``rotational``,
+``kinematic_viscosity``, ``viscous_aic``), as ``loads._alone_model`` builds it. Poses are the
+ELL inputs of :func:`formation_env.sim.kernels.ell_inputs`: ``pos`` (V, 3) NED wing origins,
+``euler`` (V, 3) rad, ``speed``/``alpha``/``beta`` (V,) m/s, rad.
+"""
+
+from __future__ import annotations
+
+import numba as nb
+import numpy as np
+
+from .kernels import CORE_NONE, evaluate_one, field_velocity, posed_lattice
+
+__all__ = ["induced_drag_one", "isolated_induced_drag_one", "induced_drag_saving_one", "induced_drag_saving",
+           "AIR_DENSITY_SL"]
+
+AIR_DENSITY_SL = 1.225  # kg/m^3 (as formation_env.wake.loads.AIR_DENSITY_SL)
+
+_jit = nb.njit(cache=True, error_model="numpy")
+
+
+@_jit
+def induced_drag_one(wake, gamma, pos, euler, speed, alpha, beta, out_drag, air_density=AIR_DENSITY_SL):
+    """Induced drag (N, wind axes, positive rearwards) of each of the V vehicles of one formation
+    into ``out_drag`` (V,), for the circulation ``gamma`` (N,) solved at these poses
+    (:func:`~formation_env.wake.kernels.evaluate_one`); equal to ``vehicle_loads(...).drag_n``."""
+    nv = pos.shape[0]
+    n_panels = wake.panel_left_knot.shape[0]
+    rot, vel, trail, x1, x3, origin, bound_dir, chord_dir, r1, inv1, r3, inv3 = posed_lattice(
+        pos, euler, speed, alpha, beta, wake.knot_x1_b, wake.knot_x3_b, wake.knot_vehicle, wake.knot_surface,
+        wake.surface_origin_b, wake.surface_vehicle, wake.surface_knot_start)
+    f = np.zeros((nv, 3))  # summed Kutta-Joukowski force per vehicle, NED
+    for j in range(n_panels):
+        v = wake.panel_vehicle[j]
+        k = wake.panel_left_knot[j]
+        lx = x1[k + 1, 0] - x1[k, 0]
+        ly = x1[k + 1, 1] - x1[k, 1]
+        lz = x1[k + 1, 2] - x1[k, 2]
+        mx = 0.5 * (x1[k, 0] + x1[k + 1, 0])
+        my = 0.5 * (x1[k, 1] + x1[k + 1, 1])
+        mz = 0.5 * (x1[k, 2] + x1[k + 1, 2])
+        # Own horseshoes: the solve's law (plain, cutoff); the others': the field law (viscous core).
+        ox, oy, oz = field_velocity(mx, my, mz, v, True, x1, x3, bound_dir, chord_dir, trail, origin, speed, gamma,
+                                    wake.surface_knot_start, wake.surface_panel_start, wake.surface_vehicle,
+                                    wake.surface_core_scale, wake.cutoff_m, CORE_NONE, wake.kinematic_viscosity,
+                                    r1, inv1, r3, inv3)
+        ex, ey, ez = field_velocity(mx, my, mz, v, False, x1, x3, bound_dir, chord_dir, trail, origin, speed, gamma,
+                                    wake.surface_knot_start, wake.surface_panel_start, wake.surface_vehicle,
+                                    wake.surface_core_scale, wake.cutoff_m, wake.core_mode, wake.kinematic_viscosity,
+                                    r1, inv1, r3, inv3)
+        vx = -vel[v, 0] + ox + ex
+        vy = -vel[v, 1] + oy + ey
+        vz = -vel[v, 2] + oz + ez
+        g = air_density * gamma[j]
+        f[v, 0] += g * (vy * lz - vz * ly)
+        f[v, 1] += g * (vz * lx - vx * lz)
+        f[v, 2] += g * (vx * ly - vy * lx)
+    for v in range(nv):
+        # Body-axis force, then drag = -(force . x_wind) with x_wind the air-relative direction.
+        ca, sa = np.cos(alpha[v]), np.sin(alpha[v])
+        cb, sb = np.cos(beta[v]), np.sin(beta[v])
+        fb0 = rot[v, 0, 0] * f[v, 0] + rot[v, 0, 1] * f[v, 1] + rot[v, 0, 2] * f[v, 2]
+        fb1 = rot[v, 1, 0] * f[v, 0] + rot[v, 1, 1] * f[v, 1] + rot[v, 1, 2] * f[v, 2]
+        fb2 = rot[v, 2, 0] * f[v, 0] + rot[v, 2, 1] * f[v, 1] + rot[v, 2, 2] * f[v, 2]
+        out_drag[v] = -(fb0 * (ca * cb) + fb1 * sb + fb2 * (sa * cb))
+
+
+@_jit
+def isolated_induced_drag_one(wake_alone, v, pos, euler, speed, alpha, beta, air_density=AIR_DENSITY_SL):
+    """Induced drag (N) vehicle ``v`` of the formation would have alone at its pose and air data:
+    the single-vehicle lattice ``wake_alone`` solved by ``evaluate_one``, then :func:`induced_drag_one`."""
+    n = wake_alone.panel_left_knot.shape[0]
+    pos1 = np.empty((1, 3))
+    eul1 = np.empty((1, 3))
+    sp1 = np.empty(1)
+    al1 = np.empty(1)
+    be1 = np.empty(1)
+    for i in range(3):
+        pos1[0, i] = pos[v, i]
+        eul1[0, i] = euler[v, i]
+    sp1[0] = speed[v]
+    al1[0] = alpha[v]
+    be1[0] = beta[v]
+    gamma = np.empty(n)
+    vpts = np.empty((n, 3))
+    wind_ned = np.empty((1, 3))
+    wind_b = np.empty((1, 3))
+    omega_b = np.empty((1, 3))
+    omega_ned = np.empty((1, 3))
+    w = wake_alone
+    evaluate_one(pos1, eul1, sp1, al1, be1, w.knot_x1_b, w.knot_x3_b, w.knot_vehicle, w.knot_surface,
+                 w.surface_origin_b, w.surface_vehicle, w.surface_knot_start, w.surface_panel_start,
+                 w.surface_core_scale, w.panel_left_knot, w.panel_vehicle, w.control_b, w.normal_b, w.aic_static,
+                 w.eval_b, w.grad_w, w.vehicle_panel_start, w.cutoff_m, w.core_mode, w.aic_core_mode,
+                 w.kinematic_viscosity, gamma, vpts, wind_ned, wind_b, omega_b, omega_ned)
+    d = np.empty(1)
+    induced_drag_one(w, gamma, pos1, eul1, sp1, al1, be1, d, air_density)
+    return d[0]
+
+
+@_jit
+def induced_drag_saving_one(wake, wake_alone, pos, euler, speed, alpha, beta, gamma_formation, out_saving,
+                            air_density=AIR_DENSITY_SL):
+    """Induced-drag saving 1 - D_i(formation) / D_i(alone) of each vehicle of one formation into
+    ``out_saving`` (V,) (0 where D_i(alone) is 0). ``gamma_formation`` (N,) is the formation's
+    circulation at these poses (from ``evaluate_one``; nothing is solved for the formation here);
+    each vehicle's isolated drag solves ``wake_alone`` at its pose (every vehicle must be of the
+    make-up ``wake_alone`` describes). Equal to ``formation_benefit(...)["induced_drag_saving"]``."""
+    nv = pos.shape[0]
+    d_form = np.empty(nv)
+    induced_drag_one(wake, gamma_formation, pos, euler, speed, alpha, beta, d_form, air_density)
+    for v in range(nv):
+        d_alone = isolated_induced_drag_one(wake_alone, v, pos, euler, speed, alpha, beta, air_density)
+        out_saving[v] = 1.0 - d_form[v] / d_alone if abs(d_alone) > 0.0 else 0.0
+
+
+def induced_drag_saving(model, state, air_density: float = AIR_DENSITY_SL) -> np.ndarray:
+    """The compiled path for a batch: (B, V) induced-drag saving of ``model`` (a
+    :class:`~formation_env.wake.WakeModel`) at ``state`` (a :class:`~formation_env.wake.FormationState`).
+
+    Each formation is solved with ``evaluate_one`` and its saving taken with
+    :func:`induced_drag_saving_one`, as the env's compiled step does (a formation of different
+    vehicles takes each one's isolated drag from its own single-vehicle lattice). For tests and
+    offline use; the batched numpy reference is :func:`formation_env.wake.loads.formation_benefit`.
+    """
+    from .arrays import wake_arrays
+    from .loads import _alone_model
+
+    if not (np.isfinite(air_density) and air_density > 0):
+        raise ValueError(f"induced_drag_saving: air_density must be finite and > 0, got {air_density!r}")
+    state = model._check_state(state)
+    origin = np.zeros(3)
+    wake = wake_arrays(model, origin)
+    alone = [wake_arrays(_alone_model(v, model.core, model.eval_points, model.rotational, model.kinematic_viscosity,
+                                      model.viscous_aic), origin) for v in model.vehicles]
+    same = all(v == model.vehicles[0] for v in model.vehicles)
+    nb_, nv, n = state.batch_size, model.n_vehicles, model.n_panels
+    out = np.empty((nb_, nv))
+    gamma = np.empty(n)
+    vpts = np.empty((n, 3))
+    scratch = [np.empty((nv, 3)) for _ in range(4)]
+    w = wake
+    for b in range(nb_):
+        pos = np.ascontiguousarray(state.position_ned[b], dtype=float)
+        euler = np.ascontiguousarray(state.euler_rad[b], dtype=float)
+        speed = np.ascontiguousarray(state.airspeed_mps[b], dtype=float)
+        alpha = np.ascontiguousarray(state.alpha_rad[b], dtype=float)
+        beta = np.ascontiguousarray(state.beta_rad[b], dtype=float)
+        evaluate_one(pos, euler, speed, alpha, beta, w.knot_x1_b, w.knot_x3_b, w.knot_vehicle, w.knot_surface,
+                     w.surface_origin_b, w.surface_vehicle, w.surface_knot_start, w.surface_panel_start,
+                     w.surface_core_scale, w.panel_left_knot, w.panel_vehicle, w.control_b, w.normal_b, w.aic_static,
+                     w.eval_b, w.grad_w, w.vehicle_panel_start, w.cutoff_m, w.core_mode, w.aic_core_mode,
+                     w.kinematic_viscosity, gamma, vpts, *scratch)
+        if same:
+            induced_drag_saving_one(wake, alone[0], pos, euler, speed, alpha, beta, gamma, out[b], air_density)
+        else:
+            d_form = np.empty(nv)
+            induced_drag_one(wake, gamma, pos, euler, speed, alpha, beta, d_form, air_density)
+            for v in range(nv):
+                d_alone = isolated_induced_drag_one(alone[v], v, pos, euler, speed, alpha, beta, air_density)
+                out[b, v] = 1.0 - d_form[v] / d_alone if abs(d_alone) > 0.0 else 0.0
+    return out

@@ -1,0 +1,124 @@
+"""Compiled Biot-Savart laws of the ELL (thesis sections 4.2.2 and 4.3.6): a straight vortex branch
+(Eq. 4.35, h clipped at the cutoff of Eq. 4.31 as in Eq. 4.39), a semi-infinite trailing leg (Eqs. 4.56
+and 4.62; plain, or with the viscous core factor 1 - exp(-1.26 (h / rc)^2) of Eq. 4.1), the core
+radius rc = C sqrt(nu tau), and the shared point-to-knot vectors. Unit strength; metres, m/s."""
+
+from __future__ import annotations
+
+import math
+
+import numba as nb
+import numpy as np
+
+__all__ = ["branch", "leg", "core_radius", "point_to_knots", "segment_velocity", "leg_velocity", "FOUR_PI",
+           "CORE_NONE", "CORE_LAMB_OSEEN", "CORE_KURYLOWICH", "LAMB_OSEEN_C", "KURYLOWICH_C"]
+
+FOUR_PI = 4.0 * math.pi
+CORE_NONE, CORE_LAMB_OSEEN, CORE_KURYLOWICH = 0, 1, 2
+# Core-radius constants rc = C sqrt(nu tau): Lamb-Oseen 2.24 (Eq. 4.1), Kurylowich 36.2 / cos^2(sweep)
+# (chapters 3 and 7); the viscous factor is 1 - exp(-1.26 (h / rc)^2).
+LAMB_OSEEN_C = 2.24
+KURYLOWICH_C = 36.2
+_TINY_H = 1e-12  # below this distance a point lies on the branch line: no contribution
+_MIN_CORE_M = 1e-9
+
+_jit = nb.njit(cache=True, fastmath=False, error_model="numpy")
+
+
+@_jit
+def point_to_knots(px, py, pz, x1, x3, k0, k1, r1, inv1, r3, inv3):
+    """Vectors from the knots k0..k1-1 to P and their inverse lengths (shared by the up to five
+    branches meeting at each knot)."""
+    for k in range(k0, k1):
+        ax, ay, az = px - x1[k, 0], py - x1[k, 1], pz - x1[k, 2]
+        r1[k, 0], r1[k, 1], r1[k, 2] = ax, ay, az
+        n = math.sqrt(ax * ax + ay * ay + az * az)
+        inv1[k] = 1.0 / n if n > 0.0 else 0.0
+        bx, by, bz = px - x3[k, 0], py - x3[k, 1], pz - x3[k, 2]
+        r3[k, 0], r3[k, 1], r3[k, 2] = bx, by, bz
+        n = math.sqrt(bx * bx + by * by + bz * bz)
+        inv3[k] = 1.0 / n if n > 0.0 else 0.0
+
+
+@_jit
+def branch(dx, dy, dz, ax, ay, az, inv_a, bx, by, bz, inv_b, cutoff):
+    """Unit-strength straight branch A -> B of unit direction d, seen from P with a = P - A and
+    b = P - B: Gamma/(4 pi h) (cos gamma - cos delta) along d x a / h (Eq. 4.35), h clipped at
+    ``cutoff`` (Eq. 4.39). A zero direction (zero-length branch) or a point on the line gives 0."""
+    cx = dy * az - dz * ay
+    cy = dz * ax - dx * az
+    cz = dx * ay - dy * ax
+    h2 = cx * cx + cy * cy + cz * cz
+    if h2 < _TINY_H * _TINY_H:
+        return 0.0, 0.0, 0.0
+    cos_g = (dx * ax + dy * ay + dz * az) * inv_a
+    cos_d = (dx * bx + dy * by + dz * bz) * inv_b
+    denom = h2 if h2 >= cutoff * cutoff else math.sqrt(h2) * cutoff
+    f = (cos_g - cos_d) / (FOUR_PI * denom)
+    return f * cx, f * cy, f * cz
+
+
+@_jit
+def leg(tx, ty, tz, ax, ay, az, inv_a, cutoff, core_radius):
+    """Unit-strength semi-infinite trailing leg from A to infinity along t, seen from P (a = P - A);
+    viscous core factor 1 - exp(-1.26 (h/rc)^2) when ``core_radius`` > 0, else h clipped at cutoff."""
+    cx = ty * az - tz * ay
+    cy = tz * ax - tx * az
+    cz = tx * ay - ty * ax
+    h2 = cx * cx + cy * cy + cz * cz
+    if h2 < _TINY_H * _TINY_H:
+        return 0.0, 0.0, 0.0
+    cos_g = (tx * ax + ty * ay + tz * az) * inv_a
+    if core_radius > 0.0:
+        x = 1.26 * h2 / (core_radius * core_radius)
+        # Beyond x = 40 the factor 1 - exp(-x) rounds to exactly 1.0: skip the exponential.
+        core = 1.0 if x > 40.0 else -math.expm1(-x)
+        f = (cos_g + 1.0) * core / (FOUR_PI * h2)
+    else:
+        denom = h2 if h2 >= cutoff * cutoff else math.sqrt(h2) * cutoff
+        f = (cos_g + 1.0) / (FOUR_PI * denom)
+    return f * cx, f * cy, f * cz
+
+
+@_jit
+def core_radius(px, py, pz, origin, s, airspeed_src, surface_core_scale, core_mode, nu):
+    """Viscous core radius of surface s's trailing legs at P: rc = C sqrt(nu tau), vortex age
+    tau = |P - surface origin| / V_source; C = 2.24 (Lamb-Oseen, Eq. 4.1) or 36.2 / cos^2 sweep
+    (Kurylowich)."""
+    ox, oy, oz = px - origin[s, 0], py - origin[s, 1], pz - origin[s, 2]
+    tau = math.sqrt(ox * ox + oy * oy + oz * oz) / airspeed_src
+    c = LAMB_OSEEN_C if core_mode == CORE_LAMB_OSEEN else KURYLOWICH_C * surface_core_scale[s]
+    return max(c * math.sqrt(nu * tau), _MIN_CORE_M)
+
+
+@_jit
+def segment_velocity(p, a, b, cutoff):
+    """Velocity (3,) at point p induced by a unit-strength straight vortex a -> b (plain
+    Biot-Savart, h clipped at ``cutoff``); a convenience wrapper of :func:`branch` for tests/plots."""
+    d = b - a
+    ln = math.sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2])
+    out = np.zeros(3)
+    if ln == 0.0:
+        return out
+    d = d / ln
+    ra = p - a
+    rb = p - b
+    na = math.sqrt(ra[0] * ra[0] + ra[1] * ra[1] + ra[2] * ra[2])
+    nb_ = math.sqrt(rb[0] * rb[0] + rb[1] * rb[1] + rb[2] * rb[2])
+    if na == 0.0 or nb_ == 0.0:
+        return out
+    out[0], out[1], out[2] = branch(d[0], d[1], d[2], ra[0], ra[1], ra[2], 1.0 / na, rb[0], rb[1], rb[2], 1.0 / nb_, cutoff)
+    return out
+
+
+@_jit
+def leg_velocity(p, a, t, cutoff, core_radius):
+    """Velocity (3,) at p induced by a unit-strength semi-infinite vortex from a along the unit
+    vector t; wrapper of :func:`leg` for tests and plots."""
+    ra = p - a
+    na = math.sqrt(ra[0] * ra[0] + ra[1] * ra[1] + ra[2] * ra[2])
+    out = np.zeros(3)
+    if na == 0.0:
+        return out
+    out[0], out[1], out[2] = leg(t[0], t[1], t[2], ra[0], ra[1], ra[2], 1.0 / na, cutoff, core_radius)
+    return out

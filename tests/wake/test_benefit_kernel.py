@@ -1,0 +1,128 @@
+"""The compiled per-formation induced drag / saving (formation_env.wake.benefit) equals the numpy
+loads (formation_env.wake.loads) and reproduces the documented close-formation saving."""
+
+from __future__ import annotations
+
+import json
+from functools import lru_cache
+
+import numpy as np
+import pytest
+
+from formation_env.geometry import aerosonde, verification_wing
+from formation_env.wake import FormationState, WakeModel, formation_benefit, vehicle_loads
+from formation_env.wake.benefit import induced_drag_one, induced_drag_saving, induced_drag_saving_one
+from formation_env.wake.kernels import evaluate_one
+
+SPAN_M = 2.9
+TRIM_ALPHA = 0.056357  # Aerosonde trim at 25 m/s, 1000 m (close_formation_map.json parameters)
+TOL = 1e-9
+
+
+@lru_cache(maxsize=None)
+def _model(n: int, kind: str = "aerosonde") -> WakeModel:
+    v = aerosonde(nseg=10)
+    vehicles = [v] * n if kind == "aerosonde" else [v, verification_wing()]
+    # The simulator's WakeConfig defaults.
+    return WakeModel(vehicles, core="kurylowich", eval_points="control", rotational="lstsq", viscous_aic=True)
+
+
+def _state(offsets_b, batch: int, seed: int, jitter: bool = True) -> FormationState:
+    """B formations: vehicle i at offsets_b[i] spans (NED, leader flying north) about the trim,
+    with small random attitude / alpha / beta / airspeed / position perturbations."""
+    rng = np.random.default_rng(seed)
+    off = np.asarray(offsets_b, float) * SPAN_M
+    nv = off.shape[0]
+    s = 1.0 if jitter else 0.0
+    pos = off[None] + s * rng.uniform(-0.05, 0.05, (batch, nv, 3))
+    euler = np.array([0.0, TRIM_ALPHA, 0.0]) + s * np.radians(rng.uniform(-2.0, 2.0, (batch, nv, 3)))
+    speed = 25.0 + s * rng.uniform(-1.0, 1.0, (batch, nv))
+    alpha = TRIM_ALPHA + s * np.radians(rng.uniform(-1.5, 1.5, (batch, nv)))
+    beta = s * np.radians(rng.uniform(-1.5, 1.5, (batch, nv)))
+    return FormationState(pos, euler, speed, alpha, beta)
+
+
+def _check(model, state):
+    got = induced_drag_saving(model, state)
+    ref = formation_benefit(model, state)["induced_drag_saving"]
+    assert got.shape == ref.shape == (state.batch_size, model.n_vehicles)
+    assert np.all(np.isfinite(got))
+    np.testing.assert_allclose(got, ref, rtol=0.0, atol=TOL)
+    return got
+
+
+@pytest.mark.parametrize("slot_b", [(-2.0, 1.0, 0.3), (-2.0, 0.96, 0.1)], ids=["thesis_slot", "close_slot"])
+def test_two_aerosondes_match_numpy(slot_b):
+    got = _check(_model(2), _state([(0.0, 0.0, 0.0), slot_b], batch=4, seed=1))
+    assert np.all(got[:, 1] > 0.05)  # the follower gains in either slot
+
+
+def test_three_vehicle_echelon_matches_numpy():
+    got = _check(_model(3), _state([(0.0, 0.0, 0.0), (-2.0, 0.96, 0.1), (-4.0, 1.92, 0.2)], batch=3, seed=2))
+    assert np.all(got[:, 2] > 0.05)
+
+
+def test_far_apart_saving_is_zero():
+    got = _check(_model(2), _state([(0.0, 0.0, 0.0), (0.0, 400.0, 0.0)], batch=2, seed=3))
+    assert np.all(np.abs(got) < 1e-4)
+
+
+def test_mixed_vehicles_match_numpy():
+    # Different make-ups: each vehicle's isolated drag from its own single-vehicle lattice.
+    _check(_model(2, "mixed"), _state([(0.0, 0.0, 0.0), (-2.0, 0.8, 0.1)], batch=2, seed=4))
+
+
+def test_induced_drag_one_equals_vehicle_loads():
+    from formation_env.sim.params import wake_arrays  # re-export of formation_env.wake.arrays
+
+    model = _model(2)
+    state = _state([(0.0, 0.0, 0.0), (-2.0, 0.96, 0.1)], batch=2, seed=5)
+    sol = model.evaluate(state)
+    ref = vehicle_loads(model, state, sol, air_density=1.1).drag_n
+    wake = wake_arrays(model, np.zeros(3))
+    for b in range(state.batch_size):
+        out = np.empty(2)
+        induced_drag_one(wake, np.ascontiguousarray(sol.circulation[b]), np.ascontiguousarray(state.position_ned[b]),
+                         np.ascontiguousarray(state.euler_rad[b]), np.ascontiguousarray(state.airspeed_mps[b]),
+                         np.ascontiguousarray(state.alpha_rad[b]), np.ascontiguousarray(state.beta_rad[b]), out, 1.1)
+        np.testing.assert_allclose(out, ref[b], rtol=1e-12, atol=1e-12)
+        assert out[0] > 0  # the leader; the follower in the upwash may even see induced thrust
+
+
+def test_close_formation_saving_from_aircraft_state():
+    """The env's compiled chain (ell_inputs -> evaluate_one -> induced_drag_saving_one) on two
+    trimmed Aerosondes in the scenario slot gives the documented ~0.36 saving."""
+    from importlib import resources
+
+    from formation_env.aircraft import trim
+    from formation_env.sim.formation import FormationSimulator
+    from formation_env.sim.kernels import ell_inputs
+    from formation_env.sim.params import wake_arrays  # re-export of formation_env.wake.arrays
+    from formation_env.wake.loads import _alone_model
+
+    data = json.loads(resources.files("formation_env").joinpath("data/close_formation_map.json").read_text())
+    sim = FormationSimulator(2, 1)
+    model = sim.wake_model
+    tr = trim(25.0, 1000.0)
+    x = np.repeat(tr.state, 2, axis=0)  # (2, 16)
+    x[1, 10:13] += np.asarray(data["scenario_slot_b"]) * SPAN_M
+    nv, n = 2, model.n_panels
+    pos, euler = np.empty((nv, 3)), np.empty((nv, 3))
+    speed, alpha, beta = np.empty(nv), np.empty(nv), np.empty(nv)
+    ell_inputs(x, np.zeros((nv, 3)), np.asarray(sim.wing_origin_body, float), pos, euler, speed, alpha, beta)
+    wake = wake_arrays(model, sim.wing_origin_body)
+    alone = wake_arrays(_alone_model(model.vehicles[0], model.core, model.eval_points, model.rotational,
+                                     model.kinematic_viscosity, model.viscous_aic), sim.wing_origin_body)
+    gamma, vpts = np.empty(n), np.empty((n, 3))
+    w = wake
+    evaluate_one(pos, euler, speed, alpha, beta, w.knot_x1_b, w.knot_x3_b, w.knot_vehicle, w.knot_surface,
+                 w.surface_origin_b, w.surface_vehicle, w.surface_knot_start, w.surface_panel_start,
+                 w.surface_core_scale, w.panel_left_knot, w.panel_vehicle, w.control_b, w.normal_b, w.aic_static,
+                 w.eval_b, w.grad_w, w.vehicle_panel_start, w.cutoff_m, w.core_mode, w.aic_core_mode,
+                 w.kinematic_viscosity, gamma, vpts, *[np.empty((nv, 3)) for _ in range(4)])
+    saving = np.empty(nv)
+    induced_drag_saving_one(wake, alone, pos, euler, speed, alpha, beta, gamma, saving)
+    assert saving[1] == pytest.approx(0.36, abs=0.01)
+    assert saving[1] == pytest.approx(data["scenario_slot_saving"], abs=2e-5)  # cached to 5 decimals
+    ref = formation_benefit(model, FormationState(pos, euler, speed, alpha, beta))["induced_drag_saving"][0]
+    np.testing.assert_allclose(saving, ref, rtol=0.0, atol=TOL)

@@ -1,0 +1,153 @@
+"""The evaluation episodes: their env configuration and the batched rollout that measures every
+per-episode metric (the table in :mod:`train.evaluate`)."""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+
+import numpy as np
+
+__all__ = ["eval_env_config", "run_episodes", "SPAN_M", "SUCCESS_WINDOW_S"]
+
+SPAN_M = 2.9
+SUCCESS_WINDOW_S = 5.0
+
+
+def eval_env_config(scenario: str, action_mode: str, *, turbulence_sigma_mps: float = 1.0, wake: bool = True,
+                    control_hz: float = 10.0, compute_benefit: bool = False, duration_s: float | None = None,
+                    turbulence_field: str = "frozen"):
+    """The evaluation episodes' EnvConfig: the thesis scenario with wake and Dryden turbulence on. With
+    its defaults (sigma 1 m/s, wake on, the scenario's duration, no other randomisation) it is the test
+    set's distribution, which the training's validation (model selection) also uses."""
+    from formation_env.envs.config import EnvConfig, Randomisation
+
+    return EnvConfig(scenario=scenario, learning="followers", action_mode=action_mode, wake=wake, control_hz=control_hz,
+                     compute_benefit=compute_benefit, duration_s=duration_s, turbulence_field=turbulence_field,
+                     randomisation=Randomisation(turbulence_sigma_mps=turbulence_sigma_mps))
+
+
+def _moving_slot(scenario) -> bool:
+    return any(len(s.keyframes) > 1 for s in scenario.slots)
+
+
+def run_episodes(act: Callable[[np.ndarray], np.ndarray], config, seeds: Sequence[int], *,
+                 keep_series: bool = False, reset: Callable[[int], None] | None = None) -> list[dict]:
+    """Fly one episode per seed (all in one batch) and return the per-episode metrics. ``reset`` (a
+    stateful policy's) is called once with the number of observation rows, formations x learning
+    UAVs, before the first decision."""
+    from formation_env.control.observation import slot_demand
+    from formation_env.envs.core import FormationCore
+    from formation_env.envs.rewards import min_separation_m, slot_error_m
+
+    seeds = [int(s) for s in seeds]
+    if not seeds:
+        raise ValueError("seeds must not be empty")
+    core = FormationCore(config, batch_size=len(seeds))
+    core.reset(None, seeds)
+    eng = core.engine
+    sc = eng.scenario
+    agents = list(core.agent_indices)
+    b, a_n = len(seeds), len(agents)
+    alive = np.ones(b, dtype=bool)
+    series = {k: [] for k in ("t", "err", "sep", "act", "cmd", "saving", "final_err")}
+    end_step = np.zeros(b, dtype=np.int64)
+    returns = np.zeros(b)
+    collided = np.zeros(b, dtype=bool)
+    crashed = np.zeros(b, dtype=bool)
+    fuel0 = eng.state[:, :, 13].copy()
+    fuel_end = fuel0.copy()
+    moving = _moving_slot(sc)
+    duration = eng.duration_s
+    final_offsets = [np.asarray(s.offset_and_rate(duration)[0]) for s in sc.slots]
+    trim = eng.trim.controls[0, :4]
+    if reset is not None:
+        reset(b * a_n)
+    k = 0
+    while alive.any():
+        obs = core.observations()[:, agents].reshape(b * a_n, -1).astype(np.float32)
+        act_now = np.clip(np.asarray(act(obs), dtype=float).reshape(b, a_n, 4), -1.0, 1.0)
+        act_now[~alive] = 0.0
+        with np.errstate(all="ignore"):
+            rewards, term, trunc = core.step(act_now)
+            err = slot_error_m(eng.state, eng.position_demand_now())[:, agents]
+            sep = min_separation_m(eng.state)[:, agents]
+        k += 1
+        series["t"].append(k / config.control_hz)
+        series["err"].append(np.where(alive[:, None], err, np.nan))
+        series["sep"].append(np.where(alive[:, None], sep, np.nan))
+        series["act"].append(np.where(alive[:, None, None], act_now, np.nan))
+        series["cmd"].append(np.where(alive[:, None, None], eng.commands[:, agents], np.nan))
+        series["saving"].append(np.where(alive[:, None], core.last_saving[:, agents], np.nan))
+        if moving:
+            fe = np.full((b, a_n), np.nan)
+            vd0 = eng.velocity_demand[:, 0]
+            chi = np.arctan2(vd0[:, 1], vd0[:, 0])
+            vel0 = eng.velocity_ned()[:, 0]
+            for j, v in enumerate(agents):
+                if v == 0:
+                    continue
+                p, _ = slot_demand(eng.state[:, 0, 10:13], vel0, final_offsets[v - 1] + eng.slot_jitter[:, v], None,
+                                   track_angle_rad=chi)
+                fe[:, j] = np.linalg.norm(eng.state[:, v, 10:13] - p, axis=-1)
+            series["final_err"].append(np.where(alive[:, None], fe, np.nan))
+        returns[alive] += rewards[alive][:, agents].mean(axis=1)
+        done = (term | trunc) & alive
+        if done.any():
+            idx = np.nonzero(done)[0]
+            collided[idx] = core.collided[idx]
+            crashed[idx] = core.crashed[idx].any(axis=1)
+            fuel_end[idx] = eng.state[idx, :, 13]
+            end_step[idx] = k
+            alive &= ~done
+            early = idx[term[idx]]
+            if len(early) and alive.any():  # restart crashed formations so the batch stays finite
+                core.reset(early, [seeds[i] for i in early])
+    t = np.asarray(series["t"])
+    err = np.stack(series["err"])          # (T, B, A)
+    sep = np.stack(series["sep"])
+    acts = np.stack(series["act"])         # (T, B, A, 4)
+    cmd = np.stack(series["cmd"])
+    saving = np.stack(series["saving"])
+    final_err = np.stack(series["final_err"]) if moving else None
+    schedule_start = sc.slots[0].keyframes[1][0] if moving else 0.0
+    out = []
+    for i in range(b):
+        n = end_step[i]
+        e = err[:n, i]
+        m = {
+            "seed": seeds[i],
+            "duration_s": float(n / config.control_hz),
+            "return": float(returns[i]),
+            "rms_slot_error_m": float(np.sqrt(np.mean(e ** 2))),
+            "max_slot_error_m": float(np.max(e)),
+            "time_within_1m_s": float(np.sum(e < 1.0) / config.control_hz / a_n),
+            "time_within_1m_frac": float(np.mean(e < 1.0)),
+            "min_separation_m": float(np.nanmin(sep[:n, i])),
+            "collision": bool(collided[i]),
+            "crashed": bool(crashed[i]),
+            "control_effort_rad": float(np.sqrt(np.mean((cmd[:n, i, :, :3] - trim[:3]) ** 2))),
+            "throttle_mean": float(np.mean(cmd[:n, i, :, 3])),
+            "action_rms": float(np.sqrt(np.mean(acts[:n, i] ** 2))),
+            "fuel_used_kg": float(np.mean(fuel0[i, agents] - fuel_end[i, agents])),
+            "leader_fuel_kg": float(fuel0[i, 0] - fuel_end[i, 0]),
+        }
+        m["fuel_saving_pct"] = float(100.0 * (1.0 - m["fuel_used_kg"] / m["leader_fuel_kg"])) if m["leader_fuel_kg"] > 0 else float("nan")
+        if core.benefit_enabled:
+            m["induced_drag_saving"] = float(np.mean(saving[:n, i]))
+        if moving:
+            fe = final_err[:n, i]
+            ok = not (m["collision"] or m["crashed"]) and n >= round(eng.duration_s * config.control_hz)
+            window = t[:n] > t[n - 1] - SUCCESS_WINDOW_S
+            m["reconfig_success"] = bool(ok and np.all(fe[window] < SPAN_M))
+            outside = np.nonzero(np.any(fe >= SPAN_M, axis=1))[0]
+            if not ok or (len(outside) and outside[-1] == n - 1):
+                m["reconfig_time_s"] = float("nan")
+            else:
+                settle = t[outside[-1] + 1] if len(outside) else t[0]
+                m["reconfig_time_s"] = float(settle - schedule_start)
+        out.append(m)
+    if keep_series:
+        for i, m in enumerate(out):
+            n = end_step[i]
+            m["series"] = {"t": t[:n].tolist(), "slot_error_m": err[:n, i].mean(axis=1).tolist()}
+    return out

@@ -1,0 +1,27 @@
+"""The policy interface of the evaluation: :class:`EvalPolicy`, an ``act`` function and its action mode.
+
+Its own module so that the policy loaders (:mod:`train.policy_loader`, :mod:`train.rllib_policy`) and
+the evaluation (:mod:`train.evaluate`) share it without importing one another."""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+
+__all__ = ["EvalPolicy"]
+
+
+@dataclass
+class EvalPolicy:
+    """A policy to evaluate: ``act(obs (N, D) float32) -> actions (N, 4)`` in ``action_mode``."""
+
+    name: str
+    action_mode: str
+    act: Callable[[np.ndarray], np.ndarray]
+    control_hz: float = 10.0
+    path: str | None = None
+    reset: Callable[[int], None] | None = None
+    """Called once by :func:`run_episodes` with the number of rows (formations x learning UAVs)
+    before the first decision (stateful policies: a PID's integrators)."""

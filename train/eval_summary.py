@@ -1,0 +1,58 @@
+"""Per-policy summary of the evaluation episodes (means, worst cases, 95 % intervals) and the
+model-selection score of training's validation."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from .stats import N_BOOT, bootstrap_ci, wilson_interval
+
+__all__ = ["summarise", "selection_score"]
+
+_MEAN_KEYS = ("return", "rms_slot_error_m", "max_slot_error_m", "time_within_1m_s", "time_within_1m_frac",
+              "control_effort_rad", "throttle_mean", "action_rms", "fuel_used_kg", "leader_fuel_kg", "fuel_saving_pct",
+              "induced_drag_saving", "duration_s")
+
+
+def summarise(episodes: list[dict], *, n_boot: int = N_BOOT, seed: int = 0) -> dict:
+    """Aggregate per-episode metrics: means, the worst case where it matters, and 95 % intervals
+    (bootstrap of the mean RMS error with ``n_boot`` resamples from ``seed``; Wilson intervals of the
+    collision and reconfiguration-success rates)."""
+    n = len(episodes)
+    s = {"episodes": n}
+    for k in _MEAN_KEYS:
+        vals = [e[k] for e in episodes if k in e]
+        if vals:
+            s[k] = float(np.mean(vals))
+    rms = np.array([e["rms_slot_error_m"] for e in episodes], dtype=float)
+    s["rms_slot_error_m_ci"] = list(bootstrap_ci(rms, "mean", n_boot=n_boot, seed=seed))
+    s["rms_slot_error_m_median"] = float(np.median(rms))
+    s["rms_slot_error_m_std"] = float(np.std(rms))
+    s["max_slot_error_m_worst"] = float(max(e["max_slot_error_m"] for e in episodes))
+    seps = np.array([e["min_separation_m"] for e in episodes], dtype=float)
+    s["min_separation_m"] = float(np.min(seps))
+    s["min_separation_m_p05"] = float(np.percentile(seps, 5))
+    s["collisions"] = int(sum(e["collision"] for e in episodes))
+    s["collision_rate"] = s["collisions"] / n
+    s["collision_rate_ci"] = list(wilson_interval(s["collisions"], n))
+    s["crashes"] = int(sum(e["crashed"] for e in episodes))
+    if "reconfig_success" in episodes[0]:
+        k = int(sum(e["reconfig_success"] for e in episodes))
+        s["reconfig_success_rate"] = k / n
+        s["reconfig_success_rate_ci"] = list(wilson_interval(k, n))
+        times = [e["reconfig_time_s"] for e in episodes if not math.isnan(e["reconfig_time_s"])]
+        s["reconfig_time_s"] = float(np.mean(times)) if times else float("nan")
+    return s
+
+
+def selection_score(summary: dict) -> float:
+    """Lower is better: the model-selection criterion of the eval callback (RMS slot error; a
+    collision or crash disqualifies; failed reconfigurations add 100 m each as a fraction)."""
+    if summary["collisions"] or summary["crashes"]:
+        return float("inf")
+    score = summary["rms_slot_error_m"]
+    if "reconfig_success_rate" in summary:
+        score += 100.0 * (1.0 - summary["reconfig_success_rate"])
+    return float(score)

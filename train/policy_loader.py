@@ -1,0 +1,102 @@
+"""Loading the policies to evaluate: ``"pid"`` (the thesis FCS, zero residual), ``"pid_formation"``
+(the classical formation-keeping baseline), an SB3 zip or an RLlib checkpoint / run directory."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+
+from .config import ACTION_MODES, ALGOS
+from .eval_policy import EvalPolicy
+
+__all__ = ["load_policy"]
+
+
+def _pid_policy() -> EvalPolicy:
+    return EvalPolicy("pid", "residual", lambda obs: np.zeros((obs.shape[0], 4), dtype=np.float32))
+
+
+def _pid_formation_policy() -> EvalPolicy:
+    """The classical formation-keeping controller (``agents.pid_formation.PIDFormation``), imported
+    only here: a stateful agent whose ``reset(n_rows)`` runs before every batch of episodes."""
+    try:
+        from agents.pid_formation import PIDFormation
+    except ModuleNotFoundError as exc:
+        if exc.name not in ("agents.pid_formation", "agents"):
+            raise
+        raise ValueError("policy 'pid_formation' needs agents/pid_formation.py, which this checkout does not have") from None
+
+    agent = PIDFormation()
+    return EvalPolicy("pid_formation", str(agent.action_mode), agent.act, float(agent.control_hz), reset=agent.reset)
+
+
+def _policy_metadata(path: Path) -> dict:
+    """Metadata of a policy zip: its sidecar ``<stem>.json``, else its run's ``config.yaml``."""
+    side = path.with_suffix(".json")
+    if side.is_file():
+        data = json.loads(side.read_text())
+        return data.get("env", data)
+    for parent in (path.parent, path.parent.parent):
+        cfg = parent / "config.yaml"
+        if cfg.is_file():
+            import yaml
+
+            data = yaml.safe_load(cfg.read_text()) or {}
+            return {"algo": data.get("algo"), "action_mode": data.get("action_mode"), "scenario": data.get("scenario"),
+                    "control_hz": (data.get("env_kwargs") or {}).get("control_hz", 10.0)}
+    return {}
+
+
+def load_policy(spec: str, *, action_mode: str | None = None, name: str | None = None, device: str = "cpu") -> EvalPolicy:
+    """``"pid"`` (the thesis FCS: zero residual), ``"pid_formation"`` (the classical formation-keeping
+    baseline of ``agents.pid_formation``), the path of an SB3 zip (its algo and action mode come from
+    the sidecar JSON or the run's config.yaml; ``action_mode`` overrides), or an RLlib checkpoint / run
+    directory of ``formation-env train --backend rllib`` (its metadata fixes the action mode)."""
+    if spec == "pid":
+        return _pid_policy()
+    if spec == "pid_formation":
+        return _pid_formation_policy()
+    path = Path(spec)
+    if path.is_dir():
+        # An RLlib checkpoint (or run directory); ray is imported only here, and only then.
+        from .rllib_checkpoints import is_rllib_checkpoint
+        from .rllib_policy import load_rllib_policy
+
+        if not is_rllib_checkpoint(path):
+            raise ValueError(f"policy directory {spec!r} is not an RLlib checkpoint or run directory of this project")
+        pol = load_rllib_policy(path, name=name)
+        if action_mode is not None and action_mode != pol.action_mode:
+            raise ValueError(f"policy {spec!r} was trained with {pol.action_mode!r} actions, not {action_mode!r} "
+                             "(an RLlib checkpoint's metadata fixes its action mode; leave out --action-mode)")
+        return pol
+    if not path.is_file():
+        raise ValueError(f"policy file {spec!r} does not exist (give an SB3 .zip, an RLlib checkpoint directory, "
+                         "'pid' or 'pid_formation')")
+    meta = _policy_metadata(path)
+    mode = action_mode or meta.get("action_mode")
+    if mode is None:
+        raise ValueError(f"policy {spec!r}: its action mode is unknown (no {path.with_suffix('.json').name} or "
+                         "config.yaml beside it); pass --action-mode")
+    if mode not in ACTION_MODES:
+        raise ValueError(f"unknown action mode {mode!r}; choose one of {ACTION_MODES}")
+    from stable_baselines3 import PPO, SAC, TD3
+
+    classes = {"ppo": PPO, "sac": SAC, "td3": TD3}
+    algo = meta.get("algo")
+    order = [algo] if algo in ALGOS else list(ALGOS)
+    model, errors = None, []
+    for a in order:
+        try:
+            model = classes[a].load(str(path), device=device)
+            break
+        except Exception as exc:  # noqa: BLE001 - try the next algorithm
+            errors.append(f"{a}: {exc}")
+    if model is None:
+        raise ValueError(f"policy {spec!r} is not a loadable SB3 PPO/SAC/TD3 zip ({'; '.join(errors)})")
+
+    def act(obs: np.ndarray) -> np.ndarray:
+        return model.predict(obs, deterministic=True)[0]
+
+    return EvalPolicy(name or path.stem, mode, act, float(meta.get("control_hz", 10.0) or 10.0), str(path))
