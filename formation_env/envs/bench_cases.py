@@ -20,14 +20,23 @@ import numpy as np
 __all__ = ["run_case", "run_cases"]
 
 
-def _best(fn, repeats: int) -> float:
-    fn()  # compile / warm up
+def _calibrated(step, budget_s: float, repeats: int) -> tuple[int, float]:
+    """``(n, best time of n calls of step())``: after a warm-up (compilation), n is chosen so that one
+    timed run lasts about ``budget_s`` whatever the code's speed (older code may be 10x slower)."""
+    step()
+    t0 = time.perf_counter()
+    k = 0
+    while k < 3 or time.perf_counter() - t0 < 0.05 * budget_s:
+        step()
+        k += 1
+    n = max(2, int(budget_s * k / max(time.perf_counter() - t0, 1e-9)))
     times = []
     for _ in range(repeats):
         t0 = time.perf_counter()
-        fn()
+        for _ in range(n):
+            step()
         times.append(time.perf_counter() - t0)
-    return float(min(times))
+    return n, float(min(times))
 
 
 def _single(case: dict, budget_s: float, repeats: int) -> dict:
@@ -37,15 +46,13 @@ def _single(case: dict, budget_s: float, repeats: int) -> dict:
     zero = {a: np.zeros(4, np.float32) for a in env.possible_agents}
     env.reset(seed=0)
     substeps = env.substeps
-    decisions = max(20, int(budget_s * 2000))
 
-    def run():
-        for _ in range(decisions):
-            if not env.agents:
-                env.reset(seed=0)
-            env.step(zero)
+    def one():
+        if not env.agents:
+            env.reset(seed=0)
+        env.step(zero)
 
-    t = _best(run, repeats)
+    decisions, t = _calibrated(one, budget_s, repeats)
     physics = decisions * substeps / t
     return {**case, "decisions_per_s": decisions / t, "physics_steps_per_s": physics,
             "uav_physics_steps_per_s": 2 * physics}
@@ -62,13 +69,7 @@ def _vector(case: dict, budget_s: float, repeats: int) -> dict:
                            **opts)
     venv.reset()
     act = np.zeros((venv.num_envs, 4), np.float32)
-    decisions = max(2, int(budget_s * 40_000 / n))
-
-    def run():
-        for _ in range(decisions):
-            venv.step(act)
-
-    t = _best(run, repeats)
+    decisions, t = _calibrated(lambda: venv.step(act), budget_s, repeats)
     physics = n * decisions * 5 / t
     return {**case, "formation_physics_steps_per_s": physics, "uav_physics_steps_per_s": 2 * physics,
             "agent_decisions_per_s": venv.num_envs * decisions / t}

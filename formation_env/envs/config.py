@@ -111,8 +111,9 @@ class EnvConfig:
     obs_mode: "flat" (normalised Box, default) or "dict".
     collision_separation_b: minimum CG separation, spans, below which the episode ends (collision).
     duration_s: episode length (None: the scenario's).
-    compute_benefit: compute each UAV's induced-drag saving (ELL loads) every control step for the
-        infos (also forced on when the benefit weight is > 0).
+    compute_benefit: compute each UAV's induced-drag saving (ELL Kutta-Joukowski loads against the same
+        UAV alone) every decision, at the last physics step's ELL solve, for the infos (also forced on when
+        the benefit weight is > 0; compiled into the decision step).
     wake_update_every: physics steps between ELL solves (1: every 50 Hz step, the default; 2: 25 Hz,
         about twice as fast; the induced wind is held in between).
     turbulence_field: "frozen" (default): one frozen (Taylor) Dryden field per formation that every

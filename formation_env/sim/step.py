@@ -13,6 +13,10 @@ loop, the Simulink model's order):
    the envelope (:func:`formation_env.sim.kernels.step_one`);
 5. turbulence field advanced one step and sampled at the new positions.
 
+With the benefit on, the induced-drag saving of the decision is read off the last substep's ELL
+solve (the poses and circulation the physics used), so it costs only the Kutta-Joukowski loads and
+each UAV's isolated solve, not another joint solve.
+
 A formation stops its substeps as soon as a UAV leaves the envelope (its episode ends). Then the
 demands at the new state, the observation, the formation benefit and the reward are formed
 (:mod:`.observe`). The state is updated in place and nothing else is kept between calls
@@ -225,14 +229,29 @@ def decide_one(p, s, b, actions, o):
     scratch_n = np.empty(N_STREAMS_PER_LANE)
     status_any = np.zeros(nv, dtype=np.int64)
     min_sep = np.inf
-    for _ in range(p.substeps):
+    # formation benefit: read off the last substep's ELL solve (its poses and circulation), which
+    # the physics needs anyway; a fresh solve only when that substep had none
+    ell_pos, ell_euler = np.empty((nv, 3)), np.empty((nv, 3))
+    ell_speed, ell_alpha, ell_beta = np.empty(nv), np.empty(nv), np.empty(nv)
+    solved_last = False
+    for sub in range(p.substeps):
         t = s.step[b] * p.dt_s
         _velocity_ned(s.aircraft[b], vel)
         formation_demands(p.scenario, t, s.aircraft[b], vel, s.reference_position[b], s.manoeuvre[b],
                           s.slot_jitter[b], s.position_demand[b], s.velocity_demand[b])
         _ambient(p, s, b, t, amb)
         _control(p, s, b, actions, amb, vel, cmd)
+        solved_last = False
+        if p.benefit_on and sub == p.substeps - 1 and s.step[b] % p.wake_update_every == 0:
+            ell_inputs(s.aircraft[b], amb, p.wake.wing_origin_body, ell_pos, ell_euler, ell_speed, ell_alpha, ell_beta)
+            solved_last = True
         _physics(p, s, b, cmd, amb, new, status)
+        if solved_last:  # step_one solved unless the formation was outside the envelope (gamma zeroed)
+            solved_last = False
+            for k in range(s.circulation.shape[1]):
+                if s.circulation[b, k] != 0.0:
+                    solved_last = True
+                    break
         s.aircraft[b] = new
         s.command[b] = cmd
         for a in range(nv):
@@ -275,8 +294,15 @@ def decide_one(p, s, b, actions, o):
     o.terminated[b] = collided or crashed_any
     o.truncated[b] = (not o.terminated[b]) and s.step[b] >= p.episode_steps
     if p.benefit_on:
-        _ambient(p, s, b, s.step[b] * p.dt_s, amb)
-        formation_benefit(p, s, b, amb, o.saving[b])
+        if crashed_any:
+            for a in range(nv):
+                o.saving[b, a] = 0.0
+        elif solved_last:
+            induced_drag_saving_one(p.wake, p.wake_alone, ell_pos, ell_euler, ell_speed, ell_alpha, ell_beta,
+                                    s.circulation[b], o.saving[b])
+        else:
+            _ambient(p, s, b, s.step[b] * p.dt_s, amb)
+            formation_benefit(p, s, b, amb, o.saving[b])
     remaining = max(p.episode_steps - s.step[b], 0) / p.substeps
     reward_formation(p.reward, o.slot_error_m[b], s.previous_error[b], actions, s.previous_action[b], o.saving[b],
                      o.separation_m[b], collided, o.crashed[b], remaining, o.reward_terms[b])

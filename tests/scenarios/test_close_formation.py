@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 
 import formation_env  # noqa: F401  (registers the Gym ids)
-from formation_env.envs import GYM_IDS
+from formation_env.envs import GYM_IDS, Randomisation
 from formation_env.scenarios import get_scenario, scenario_names
 from formation_env.verification import close_formation_map as cfm
 
@@ -108,3 +108,25 @@ def test_scenario_and_gym_id(cache):
     # the env's own ELL saving (same model, same poses) starts at the map's value
     assert info["induced_drag_saving"] == pytest.approx(cache["scenario_slot_saving"], abs=0.05)
     env.close()
+
+
+def test_env_benefit_is_the_ell_saving_of_the_last_physics_step():
+    """The compiled benefit of a decision is formation_benefit (numpy ELL loads) at the poses of the
+    decision's last physics step (here one physics step per decision), to round-off."""
+    from formation_env.sim.formation import ell_state_from_aircraft
+    from formation_env.wake import formation_benefit
+
+    env = formation_env.parallel_env("close_formation", action_mode="setpoints", control_hz=50.0, compute_benefit=True,
+                                     randomisation=Randomisation(turbulence_sigma_mps=1.0))
+    env.reset(seed=3)
+    eng = env.engine
+    rng = np.random.default_rng(0)
+    seen = []
+    for _ in range(30):
+        before = eng.state.copy(), eng.ambient_wind().copy()
+        _, _, term, _, infos = env.step({a: rng.uniform(-0.01, 0.01, 4).astype(np.float32) for a in env.agents})
+        ref = formation_benefit(eng.wake_model, ell_state_from_aircraft(before[0], before[1], eng.wing_origin_body))
+        got = [infos[a]["induced_drag_saving"] for a in env.possible_agents]
+        np.testing.assert_allclose(got, ref["induced_drag_saving"][0], rtol=0, atol=1e-9)
+        seen.append(got[1])
+    assert 0.3 < np.mean(seen) < 0.45  # the follower starts at the optimum (36 % there)
