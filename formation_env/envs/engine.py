@@ -151,6 +151,8 @@ class FormationEpisode:
             s.status[i] = 0
             s.command[i] = self.trim.controls[0, :4]
             s.previous_action[i] = 0.0
+            s.episode_return[i] = 0.0
+            s.episode_decisions[i] = 0
             s.gust_ned[i] = 0.0
         if field_seeds:
             frozen_field_reset(self.params.field, s.field, idx, field_seeds)

@@ -47,8 +47,6 @@ class BatchedFormations:
         self.obs_size = self.core.obs_size
         self._seed_stream = np.random.SeedSequence(seed)
         self._pending_seeds: list[int | None] = [None] * self.n_formations
-        self.episode_return = np.zeros(self.num_envs)
-        self.episode_length = np.zeros(self.num_envs, dtype=np.int64)
         self.t_start = time.perf_counter()
 
     def set_seed(self, seed: int | None) -> None:
@@ -75,10 +73,6 @@ class BatchedFormations:
     def reset(self, formations=None) -> None:
         idx = np.arange(self.n_formations) if formations is None else np.asarray(formations, dtype=np.int64)
         self.core.reset(idx, self._seeds_for(idx))
-        for f in idx:
-            sl = slice(f * self.agents_per_formation, (f + 1) * self.agents_per_formation)
-            self.episode_return[sl] = 0.0
-            self.episode_length[sl] = 0
 
     def observations(self) -> np.ndarray:
         obs = self.core.observations()[:, list(self.core.agent_indices)]
@@ -101,13 +95,13 @@ class BatchedFormations:
         rewards = rewards_v[:, list(self.core.agent_indices)].reshape(-1)
         rep = self.agents_per_formation
         terminated, truncated = np.repeat(term_f, rep), np.repeat(trunc_f, rep)
-        self.episode_return += rewards
-        self.episode_length += 1
         done_f = term_f | trunc_f
         final_obs = None
         if done_f.any():
             final_obs = self.observations()
-            self.final_episode = (self.episode_return.copy(), self.episode_length.copy())
+            st = self.core.engine.sim_state  # episode sums kept by the compiled step
+            self.final_episode = (st.episode_return[:, list(self.core.agent_indices)].reshape(-1).copy(),
+                                  np.repeat(st.episode_decisions, rep))
             self.reset(np.nonzero(done_f)[0])
         return self.observations(), rewards.astype(np.float32), terminated, truncated, final_obs, np.repeat(done_f, rep)
 

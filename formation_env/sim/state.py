@@ -39,6 +39,8 @@ class SimState(NamedTuple):
     status: np.ndarray  # (B, V) int64 envelope status bits after the last physics step
     previous_action: np.ndarray  # (B, V, 4) the agent's action of the last decision (0 for PID-flown UAVs)
     previous_error: np.ndarray  # (B, V) distance from the slot at the last decision, m
+    episode_return: np.ndarray  # (B, V) sum of the rewards of this episode
+    episode_decisions: np.ndarray  # (B,) int64 decisions taken this episode
 
 
 class StepOutput(NamedTuple):
@@ -63,7 +65,8 @@ def init_state(batch_size: int, n_vehicles: int, n_panels: int, field_params) ->
     return SimState(np.zeros((b, v, N_STATES)), np.zeros((b, v, N_CSTATE)), np.zeros((b, v, 4)),
                     np.zeros(b, dtype=np.int64), z3(), z3(), np.zeros((b, max(n_panels, 1))), z3(), z3(), z3(),
                     np.zeros((b, 3)), np.zeros((b, 4)), np.zeros((b, 3)), z3(), frozen_field_init(field_params, b, v),
-                    np.zeros((b, v), dtype=np.int64), np.zeros((b, v, 4)), np.zeros((b, v)))
+                    np.zeros((b, v), dtype=np.int64), np.zeros((b, v, 4)), np.zeros((b, v)), np.zeros((b, v)),
+                    np.zeros(b, dtype=np.int64))
 
 
 def init_output(batch_size: int, n_vehicles: int, obs_size: int) -> StepOutput:

@@ -22,16 +22,19 @@ demands at the new state, the observation, the formation benefit and the reward 
 (:mod:`.observe`). The state is updated in place and nothing else is kept between calls
 (:func:`formation_env.sim.state.copy_state` gives functional semantics when needed).
 
-Threads: the kernel releases the GIL and a small pool (``numba.get_num_threads()`` threads, so
-``NUMBA_NUM_THREADS`` applies) takes chunks of formations from a queue, one parallel region per
-decision. numba's ``prange`` cannot take these named structs of arrays, and its OpenMP barrier is
+Threads: the kernel releases the GIL; the calling thread and ``numba.get_num_threads() - 1`` pool
+workers (``NUMBA_NUM_THREADS`` applies) take chunks of formations from a shared counter, one
+parallel region per decision; a tuner measures serial against threaded per batch size and keeps the
+faster (a preempted thread stalls a small batch; see :class:`_ThreadTuner`). numba's ``prange`` cannot take these named structs of arrays, and its OpenMP barrier is
 what collapsed under a busy core (25x at B = 16); with a queue, a thread on a busy core simply takes
 fewer chunks.
 """
 
 from __future__ import annotations
 
+import itertools
 import math
+import time
 from concurrent.futures import ThreadPoolExecutor
 
 import numba as nb
@@ -311,9 +314,11 @@ def decide_one(p, s, b, actions, o):
         for k in range(o.reward_terms.shape[2]):
             total += o.reward_terms[b, a, k]
         o.reward[b, a] = total
+        s.episode_return[b, a] += total
         s.previous_error[b, a] = o.slot_error_m[b, a]
         for k in range(4):
             s.previous_action[b, a, k] = actions[a, k]
+    s.episode_decisions[b] += 1
     observe_one(p, s, b, o.observation[b])
 
 
@@ -341,24 +346,76 @@ def _threads() -> int:
     return max(1, int(nb.get_num_threads()))
 
 
-def _run_chunks(kernel, n: int, args: tuple) -> None:
-    """Run ``kernel(*args, start, stop)`` over 0..n in chunks on a thread pool. Chunks are small
-    (about four per thread) and taken from a queue, so a thread on a busy core takes fewer of them:
-    throughput degrades in proportion to the CPU taken away instead of collapsing at a barrier."""
+def _run_parallel(kernel, n: int, args: tuple, threads: int) -> None:
+    """``kernel(*args, start, stop)`` over 0..n in chunks, on the calling thread plus ``threads - 1``
+    pool workers taking chunks (about four per thread) from a shared counter."""
     global _POOL, _POOL_SIZE
-    threads = _threads()
-    if threads == 1 or n < PARALLEL_MIN_BATCH:
-        kernel(*args, 0, n)
-        return
-    if _POOL is None or _POOL_SIZE != threads:
+    if _POOL is None or _POOL_SIZE != threads - 1:
         if _POOL is not None:
             _POOL.shutdown(wait=False)
-        _POOL, _POOL_SIZE = ThreadPoolExecutor(threads, thread_name_prefix="formation-step"), threads
+        _POOL, _POOL_SIZE = ThreadPoolExecutor(threads - 1, thread_name_prefix="formation-step"), threads - 1
     chunk = max(1, -(-n // (4 * threads)))
-    futures = [_POOL.submit(kernel, *args, a, min(a + chunk, n)) for a in range(chunk, n, chunk)]
-    kernel(*args, 0, min(chunk, n))  # the calling thread works too
+    n_chunks = -(-n // chunk)
+    counter = itertools.count()  # next() is atomic under the GIL
+
+    def work():
+        while True:
+            c = next(counter)
+            if c >= n_chunks:
+                return
+            kernel(*args, c * chunk, min((c + 1) * chunk, n))
+
+    futures = [_POOL.submit(work) for _ in range(threads - 1)]
+    work()
     for f in futures:
         f.result()
+
+
+class _ThreadTuner:
+    """Serial or threaded, whichever is measured faster for this kernel and batch size.
+
+    A thread that another process preempts holds its chunk until the scheduler returns (milliseconds),
+    and the decision waits for it: on a busy machine small batches run faster serially, large ones
+    threaded. Each (kernel, B) keeps a moving average of the wall time of both settings, uses the
+    faster and re-measures the other every ``EXPLORE``-th call, so throughput follows the machine's
+    load. Results do not depend on the choice (formations are independent: bit-identical)."""
+
+    EXPLORE = 32
+    ALPHA = 0.25
+
+    def __init__(self) -> None:
+        self.stats: dict = {}
+
+    def run(self, kernel, n: int, args: tuple) -> None:
+        threads = min(_threads(), n)
+        if threads <= 1 or n < PARALLEL_MIN_BATCH:
+            kernel(*args, 0, n)
+            return
+        st = self.stats.setdefault((kernel, n, threads), [math.inf, math.inf, 0])
+        st[2] += 1
+        calls = st[2]
+        if calls <= 5:  # warm-up: serial, threaded, serial, threaded (the first call may compile)
+            use_threads = calls % 2 == 0
+        else:
+            use_threads = st[1] < st[0]
+            if calls % self.EXPLORE == 0:
+                use_threads = not use_threads
+        t0 = time.perf_counter()
+        if use_threads:
+            _run_parallel(kernel, n, args, threads)
+        else:
+            kernel(*args, 0, n)
+        dt = time.perf_counter() - t0
+        if calls > 1:
+            k = 1 if use_threads else 0
+            st[k] = dt if st[k] == math.inf else (1.0 - self.ALPHA) * st[k] + self.ALPHA * dt
+
+
+_TUNER = _ThreadTuner()
+
+
+def _run_chunks(kernel, n: int, args: tuple) -> None:
+    _TUNER.run(kernel, n, args)
 
 
 def step(params: StepParams, state: SimState, actions: np.ndarray, out: StepOutput) -> StepOutput:
