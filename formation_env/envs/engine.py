@@ -10,7 +10,6 @@ the scenario runner (every UAV PID-flown, one physics step per call) flies the s
 from __future__ import annotations
 
 import math
-from typing import NamedTuple
 
 import numpy as np
 

@@ -24,20 +24,18 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..aircraft import AEROSONDE, DEFAULT_OPTIONS, AerosondeParams, ModelOptions, check_envelope, step
+from ..aircraft import AEROSONDE, DEFAULT_OPTIONS, AerosondeParams, ModelOptions
 from ..aircraft.envelope import DEFAULT_LIMITS, EnvelopeLimits
 from ..aircraft.kernels import pack as pack_aircraft
 from ..aircraft.state import N_STATES, POS, QUAT
-from ..atmosphere.wind import WindInput
 from ..frames import dcm_body_to_ned_from_quaternion, euler_from_quaternion
 from ..geometry import Vehicle, aerosonde
 from ..wake import FormationState, WakeModel
-from ..wake.kernels import CORE_NONE
-from .kernels import (min_separation_batch, pack_limits, step_batch_parallel, step_batch_serial, step_many_parallel,
-                      step_many_serial)
 
-BACKENDS = ("numba", "numpy")
-_PARALLEL_MIN_BATCH = 16  # below this many formations, thread start-up costs more than it saves
+from ..wake.arrays import wake_arrays
+from .kernels import min_separation, pack_limits, step_range
+from .params import AircraftArrays
+
 
 __all__ = ["WakeConfig", "FormationSimulator", "ell_state_from_aircraft", "StepResult"]
 
@@ -103,16 +101,13 @@ class FormationSimulator:
 
     def __init__(self, n_vehicles: int, batch_size: int = 1, *, dt: float = 0.02, wake: WakeConfig = WakeConfig(),
                  params: AerosondeParams = AEROSONDE, options: ModelOptions = DEFAULT_OPTIONS,
-                 limits: EnvelopeLimits = DEFAULT_LIMITS, backend: str = "numba") -> None:
+                 limits: EnvelopeLimits = DEFAULT_LIMITS) -> None:
         if not isinstance(n_vehicles, int) or n_vehicles < 1:
             raise ValueError(f"FormationSimulator: n_vehicles must be an integer >= 1, got {n_vehicles!r}")
         if not isinstance(batch_size, int) or batch_size < 1:
             raise ValueError(f"FormationSimulator: batch_size must be an integer >= 1, got {batch_size!r}")
         if not (np.isfinite(dt) and dt > 0):
             raise ValueError(f"FormationSimulator: dt must be finite and > 0, got {dt!r}")
-        if backend not in BACKENDS:
-            raise ValueError(f"FormationSimulator: backend must be one of {BACKENDS}, got {backend!r}")
-        self.backend = backend
         self.n_vehicles, self.batch_size, self.dt = n_vehicles, batch_size, float(dt)
         self.wake_config, self.params, self.options, self.limits = wake, params, options, limits
         vehicle: Vehicle = aerosonde(nseg=wake.nseg, tailplane=wake.tailplane)
@@ -125,8 +120,8 @@ class FormationSimulator:
         self.wing_origin_body = np.asarray(params.r_ac_body, float) - np.asarray(params.cg_gross_body, float)
         # The compiled step needs lattice arrays even when the wake is off (it then skips ELL).
         self._kernel_model = self.wake_model or WakeModel([vehicle])
-        self._packed = pack_aircraft(params, options)
-        self._limits = pack_limits(limits)
+        self._aircraft = AircraftArrays(*pack_aircraft(params, options), pack_limits(limits))
+        self._wake = wake_arrays(self._kernel_model, self.wing_origin_body)
         self._steps = 0
         self._held_wind = np.zeros((batch_size, n_vehicles, 3))
         self._held_omega = np.zeros((batch_size, n_vehicles, 3))
@@ -172,88 +167,42 @@ class FormationSimulator:
             raise ValueError("FormationSimulator.step: controls contain NaN or inf")
         amb = np.zeros((b, v, 3)) if ambient_wind_ned is None else np.broadcast_to(np.asarray(ambient_wind_ned, float), (b, v, 3))
         turb = np.zeros((b, v, 3)) if turbulence_body is None else np.broadcast_to(np.asarray(turbulence_body, float), (b, v, 3))
-        if self.backend == "numba":
-            return self._step_compiled(state, controls, amb, turb)
-        status_before = check_envelope(state.reshape(b * v, -1), WindInput(wind_ned=amb.reshape(b * v, 3)),
-                                       self.limits, self.params).reshape(b, v)
-        formation_ok = np.all(status_before == 0, axis=1)
-        if self._steps % self.wake_config.update_every == 0:
-            self._held_wind, self._held_omega, self._held_gamma = self.induced_wind(state, amb, formation_ok)
-        self._steps += 1
-        wind_in = WindInput(wind_ned=amb.reshape(b * v, 3), turbulence_body=turb.reshape(b * v, 3),
-                            ell_translational_ned=self._held_wind.reshape(b * v, 3),
-                            ell_rotational_body=self._held_omega.reshape(b * v, 3))
-        with np.errstate(all="ignore"):  # a diverging aircraft may overflow; it is flagged below
-            new = step(state.reshape(b * v, -1), controls.reshape(b * v, -1), wind_in, self.dt, self.params, self.options)
-        new = new.reshape(b, v, N_STATES)
-        total_wind = WindInput(wind_ned=(amb + self._held_wind).reshape(b * v, 3), turbulence_body=turb.reshape(b * v, 3))
-        status = check_envelope(new.reshape(b * v, -1), total_wind, self.limits, self.params).reshape(b, v)
-        return StepResult(new, self._held_wind.copy(), self._held_omega.copy(), status, self._held_gamma)
+        return self._step_compiled(state, controls, amb, turb)
 
     def step_many(self, state: np.ndarray, controls: np.ndarray, ambient_seq: np.ndarray, turbulence_seq: np.ndarray):
-        """S physics steps with the controls held, in one compiled call (the same step as :meth:`step`).
+        """S physics steps with the controls held (the same step as :meth:`step`).
 
         ambient_seq, turbulence_seq: (S, B, V, 3), the winds of each step. Returns
         ``(StepResult after the last step, status OR-ed over the steps (B, V), smallest CG separation
-        seen (B,))``. Inputs must already be valid (finite controls of the right shapes): this is the
-        inner loop of callers that validate once per decision.
+        seen (B,))``. Inputs must already be valid (finite controls of the right shapes).
         """
         b, v = self.batch_size, self.n_vehicles
-        m = self._kernel_model
-        t = m.template
-        nsub = ambient_seq.shape[0]
-        if b >= _PARALLEL_MIN_BATCH:
-            # Large batches: the per-step parallel kernel spreads over the threads better than one
-            # long multi-step call per formation (measured ~1.35x at B = 1024); same step_one, same bits.
-            status_any = np.zeros((b, v), dtype=np.int64)
-            min_sep = np.full(b, np.inf)
-            sep = np.empty(b)
-            x = state
-            for s in range(nsub):
-                res = self._step_compiled(x, controls, ambient_seq[s], turbulence_seq[s])
-                x = res.state
-                status_any |= res.status
-                min_separation_batch(x, sep)
-                min_sep = np.where((sep < min_sep) | np.isnan(sep), sep, min_sep)
-            return res, status_any, min_sep
-        if self._held_gamma is None or self._held_gamma.shape != (b, m.n_panels):
-            self._held_gamma = np.zeros((b, m.n_panels))
-        out = np.empty((b, v, N_STATES))
-        status = np.empty((b, v), dtype=np.int64)
-        status_any = np.empty((b, v), dtype=np.int64)
-        min_sep = np.empty(b)
-        kernel = step_many_parallel if b >= _PARALLEL_MIN_BATCH else step_many_serial
-        kernel(np.ascontiguousarray(state), np.ascontiguousarray(controls), np.ascontiguousarray(ambient_seq),
-               np.ascontiguousarray(turbulence_seq), self._held_wind, self._held_omega, self._held_gamma, self._steps,
-               self.wake_config.update_every, self.wake_model is not None, self.wing_origin_body,
-               t.knot_x1_b, t.knot_x3_b, t.knot_vehicle, t.knot_surface, t.surface_origin_b, t.surface_vehicle,
-               t.surface_knot_start, t.surface_panel_start, t.surface_core_scale, t.panel_left_knot, t.panel_vehicle,
-               t.control_b, t.normal_b, m.aic_static, m.eval_b, m.grad_w, t.vehicle_panel_start, t.cutoff_m, m._core_mode,
-               m._core_mode if m.viscous_aic else CORE_NONE, m.kinematic_viscosity,
-               self.dt, *self._packed, self._limits, out, status, status_any, min_sep)
-        self._steps += nsub
-        gamma = self._held_gamma.copy() if self.wake_model is not None else None
-        return StepResult(out, self._held_wind.copy(), self._held_omega.copy(), status, gamma), status_any, min_sep
+        status_any = np.zeros((b, v), dtype=np.int64)
+        min_sep = np.full(b, np.inf)
+        x = state
+        for s in range(ambient_seq.shape[0]):
+            res = self._step_compiled(x, controls, ambient_seq[s], turbulence_seq[s])
+            x = res.state
+            status_any |= res.status
+            sep = np.array([min_separation(x[i]) for i in range(b)])
+            min_sep = np.where((sep < min_sep) | np.isnan(sep), sep, min_sep)
+        return res, status_any, min_sep
 
     def _step_compiled(self, state, controls, amb, turb) -> StepResult:
-        """The same step in one compiled call (:mod:`formation_env.sim.kernels`)."""
+        """The same step in compiled code (:func:`formation_env.sim.kernels.step_one` per formation,
+        formations on the decision step's thread pool)."""
+        from .step import _run_chunks
+
         b, v = self.batch_size, self.n_vehicles
         m = self._kernel_model
-        t = m.template
         update = self._steps % self.wake_config.update_every == 0
         self._steps += 1
         if self._held_gamma is None or self._held_gamma.shape != (b, m.n_panels):
             self._held_gamma = np.zeros((b, m.n_panels))
         out = np.empty((b, v, N_STATES))
         status = np.empty((b, v), dtype=np.int64)
-        kernel = step_batch_parallel if b >= _PARALLEL_MIN_BATCH else step_batch_serial
-        kernel(np.ascontiguousarray(state), np.ascontiguousarray(controls), np.ascontiguousarray(amb),
-               np.ascontiguousarray(turb), self._held_wind, self._held_omega, self._held_gamma, update,
-               self.wake_model is not None, self.wing_origin_body,
-               t.knot_x1_b, t.knot_x3_b, t.knot_vehicle, t.knot_surface, t.surface_origin_b, t.surface_vehicle,
-               t.surface_knot_start, t.surface_panel_start, t.surface_core_scale, t.panel_left_knot, t.panel_vehicle,
-               t.control_b, t.normal_b, m.aic_static, m.eval_b, m.grad_w, t.vehicle_panel_start, t.cutoff_m, m._core_mode,
-               m._core_mode if m.viscous_aic else CORE_NONE, m.kinematic_viscosity,
-               self.dt, *self._packed, self._limits, out, status)
+        _run_chunks(step_range, b, (np.ascontiguousarray(state), np.ascontiguousarray(controls), np.ascontiguousarray(amb),
+                                    np.ascontiguousarray(turb), self._held_wind, self._held_omega, self._held_gamma, update,
+                                    self.wake_model is not None, self._wake, self._aircraft, self.dt, out, status))
         gamma = self._held_gamma.copy() if self.wake_model is not None else None
         return StepResult(out, self._held_wind.copy(), self._held_omega.copy(), status, gamma)

@@ -1,5 +1,5 @@
-"""Compiled formation step: ELL effective wind -> Aerosonde RK4 -> envelope status, for B
-formations of V aircraft in one call (numba, parallel over formations when B is large).
+"""Compiled physics step of one formation: ELL effective wind -> Aerosonde RK4 -> envelope status
+(:func:`step_one`; :func:`step_range` over a slice of a batch, without the GIL).
 
 It fuses the same compiled kernels the wake and aircraft packages use
 (:func:`formation_env.wake.kernels.evaluate_one`, :func:`formation_env.aircraft.kernels.rk4_batch`),
@@ -16,7 +16,7 @@ import numpy as np
 
 from ..aircraft.kernels import _air, rk4_batch
 from ..frames import quaternion_dcm_terms
-from ..wake.kernels import evaluate_one
+from ..wake.arrays import evaluate_formation
 
 _jit = nb.njit(cache=True, error_model="numpy")
 
@@ -87,17 +87,16 @@ def ell_inputs(state, ambient, wing_origin_b, pos, euler, speed, alpha, beta):
 
 
 @_jit
-def step_one(
-    state, controls, ambient, turb, held_wind, held_omega, gamma, update_wake, wake_on, wing_origin_b,
-    knot_x1_b, knot_x3_b, knot_vehicle, knot_surface,
-    surface_origin_b, surface_vehicle, surface_knot_start, surface_panel_start, surface_core_scale,
-    panel_left_knot, panel_vehicle, control_b, normal_b, aic_static, eval_b, grad_w, vehicle_panel_start,
-    cutoff, core_mode, aic_core_mode, nu,
-    dt, v, pJ, pCT, pCP, eR, eM, eP, eF, tT, tP, tR, tA, lim,
-    out_state, out_status,
-):
-    """One formation (V aircraft) by one step; held_wind/held_omega/gamma are updated in place
-    when ``update_wake``."""
+def step_one(state, controls, ambient, turb, held_wind, held_omega, gamma, update_wake, wake_on, wake, aircraft, dt,
+             out_state, out_status):
+    """One formation (V aircraft) by one step dt: ELL effective wind when ``update_wake`` (held
+    otherwise; held_wind/held_omega/gamma are updated in place), RK4, envelope status.
+
+    state (V, 16); controls (V, 4|5); ambient (V, 3) NED and turb (V, 3) body wind, m/s; ``wake`` a
+    :class:`~formation_env.wake.arrays.WakeArrays`, ``aircraft`` an
+    :class:`~formation_env.sim.params.AircraftArrays`. A formation with an aircraft outside the
+    envelope gets no wake solve and zero induced wind (its episode is ending)."""
+    ac = aircraft
     nv = state.shape[0]
     wind = np.zeros((nv, 12))
     for a in range(nv):
@@ -111,7 +110,7 @@ def step_one(
                 for i in range(3):
                     wind[a, 6 + i] = held_wind[a, i]
                     wind[a, 9 + i] = held_omega[a, i]
-                if envelope_status(state[a], wind[a], v, lim) != 0:
+                if envelope_status(state[a], wind[a], ac.scalars, ac.limits) != 0:
                     ok = False
         if ok:
             pos = np.empty((nv, 3))
@@ -119,14 +118,9 @@ def step_one(
             speed = np.empty(nv)
             alpha = np.empty(nv)
             beta = np.empty(nv)
-            ell_inputs(state, ambient, wing_origin_b, pos, euler, speed, alpha, beta)
-            scratch_pts = np.empty((panel_left_knot.shape[0], 3))
-            omega_ned = np.empty((nv, 3))
-            wind_b = np.empty((nv, 3))
-            evaluate_one(pos, euler, speed, alpha, beta, knot_x1_b, knot_x3_b, knot_vehicle, knot_surface,
-                         surface_origin_b, surface_vehicle, surface_knot_start, surface_panel_start, surface_core_scale,
-                         panel_left_knot, panel_vehicle, control_b, normal_b, aic_static, eval_b, grad_w, vehicle_panel_start,
-                         cutoff, core_mode, aic_core_mode, nu, gamma, scratch_pts, held_wind, wind_b, held_omega, omega_ned)
+            ell_inputs(state, ambient, wake.wing_origin_body, pos, euler, speed, alpha, beta)
+            evaluate_formation(wake, pos, euler, speed, alpha, beta, gamma, np.empty((wake.panel_left_knot.shape[0], 3)),
+                               held_wind, np.empty((nv, 3)), held_omega, np.empty((nv, 3)))
         else:
             for a in range(nv):
                 for i in range(3):
@@ -138,38 +132,21 @@ def step_one(
         for i in range(3):
             wind[a, 6 + i] = held_wind[a, i]
             wind[a, 9 + i] = held_omega[a, i]
-    new = rk4_batch(state, controls, wind, dt, v, pJ, pCT, pCP, eR, eM, eP, eF, tT, tP, tR, tA)
+    new = rk4_batch(state, controls, wind, dt, ac.scalars, ac.prop_J, ac.prop_CT, ac.prop_CP, ac.engine_rpm,
+                    ac.engine_map, ac.engine_power, ac.engine_fuel, ac.atm_T, ac.atm_P, ac.atm_rho, ac.atm_a)
     for a in range(nv):
         for i in range(state.shape[1]):
             out_state[a, i] = new[a, i]
-        out_status[a] = envelope_status(new[a], wind[a], v, lim)
+        out_status[a] = envelope_status(new[a], wind[a], ac.scalars, ac.limits)
 
 
-def _make_batch(parallel: bool):
-    @nb.njit(cache=True, parallel=parallel, error_model="numpy")
-    def step_batch(
-        state, controls, ambient, turb, held_wind, held_omega, gamma, update_wake, wake_on, wing_origin_b,
-        knot_x1_b, knot_x3_b, knot_vehicle, knot_surface,
-        surface_origin_b, surface_vehicle, surface_knot_start, surface_panel_start, surface_core_scale,
-        panel_left_knot, panel_vehicle, control_b, normal_b, aic_static, eval_b, grad_w, vehicle_panel_start,
-        cutoff, core_mode, aic_core_mode, nu,
-        dt, v, pJ, pCT, pCP, eR, eM, eP, eF, tT, tP, tR, tA, lim,
-        out_state, out_status,
-    ):
-        for b in nb.prange(state.shape[0]):
-            step_one(state[b], controls[b], ambient[b], turb[b], held_wind[b], held_omega[b], gamma[b], update_wake,
-                     wake_on, wing_origin_b, knot_x1_b, knot_x3_b, knot_vehicle, knot_surface,
-                     surface_origin_b, surface_vehicle, surface_knot_start, surface_panel_start, surface_core_scale,
-                     panel_left_knot, panel_vehicle, control_b, normal_b, aic_static, eval_b, grad_w, vehicle_panel_start,
-                     cutoff, core_mode, aic_core_mode, nu,
-                     dt, v, pJ, pCT, pCP, eR, eM, eP, eF, tT, tP, tR, tA, lim,
-                     out_state[b], out_status[b])
-
-    return step_batch
-
-
-step_batch_serial = _make_batch(False)
-step_batch_parallel = _make_batch(True)
+@nb.njit(cache=True, nogil=True, error_model="numpy")
+def step_range(state, controls, ambient, turb, held_wind, held_omega, gamma, update_wake, wake_on, wake, aircraft, dt,
+               out_state, out_status, start, stop):
+    """:func:`step_one` for formations start..stop-1 of a batch (B, V, ...); releases the GIL."""
+    for b in range(start, stop):
+        step_one(state[b], controls[b], ambient[b], turb[b], held_wind[b], held_omega[b], gamma[b], update_wake, wake_on,
+                 wake, aircraft, dt, out_state[b], out_status[b])
 
 
 @_jit
@@ -184,59 +161,3 @@ def min_separation(state):
             if d < best or d != d:
                 best = d
     return best
-
-
-def _make_many(parallel: bool):
-    @nb.njit(cache=True, parallel=parallel, error_model="numpy")
-    def step_many_batch(
-        state, controls, ambient_seq, turb_seq, held_wind, held_omega, gamma, step0, update_every, wake_on,
-        wing_origin_b,
-        knot_x1_b, knot_x3_b, knot_vehicle, knot_surface,
-        surface_origin_b, surface_vehicle, surface_knot_start, surface_panel_start, surface_core_scale,
-        panel_left_knot, panel_vehicle, control_b, normal_b, aic_static, eval_b, grad_w, vehicle_panel_start,
-        cutoff, core_mode, aic_core_mode, nu,
-        dt, v, pJ, pCT, pCP, eR, eM, eP, eF, tT, tP, tR, tA, lim,
-        out_state, out_status, out_status_any, out_min_sep,
-    ):
-        """S = ambient_seq.shape[0] steps with the controls held: the same step_one per step;
-        status flags OR-ed over the steps and the smallest separation seen are returned too."""
-        nsub = ambient_seq.shape[0]
-        for b in nb.prange(state.shape[0]):
-            cur = state[b].copy()
-            nxt = np.empty_like(cur)
-            st = np.zeros(cur.shape[0], dtype=np.int64)
-            for a in range(cur.shape[0]):
-                out_status_any[b, a] = 0
-            sep = np.inf
-            for s in range(nsub):
-                update = (step0 + s) % update_every == 0
-                step_one(cur, controls[b], ambient_seq[s, b], turb_seq[s, b], held_wind[b], held_omega[b], gamma[b],
-                         update, wake_on, wing_origin_b, knot_x1_b, knot_x3_b, knot_vehicle, knot_surface,
-                         surface_origin_b, surface_vehicle, surface_knot_start, surface_panel_start, surface_core_scale,
-                         panel_left_knot, panel_vehicle, control_b, normal_b, aic_static, eval_b, grad_w, vehicle_panel_start,
-                         cutoff, core_mode, aic_core_mode, nu,
-                         dt, v, pJ, pCT, pCP, eR, eM, eP, eF, tT, tP, tR, tA, lim,
-                         nxt, st)
-                cur[:, :] = nxt
-                for a in range(cur.shape[0]):
-                    out_status_any[b, a] |= st[a]
-                d = min_separation(cur)
-                if d < sep or d != d:
-                    sep = d
-            out_state[b] = cur
-            for a in range(cur.shape[0]):
-                out_status[b, a] = st[a]
-            out_min_sep[b] = sep
-
-    return step_many_batch
-
-
-step_many_serial = _make_many(False)
-step_many_parallel = _make_many(True)
-
-
-@nb.njit(cache=True, parallel=True, error_model="numpy")
-def min_separation_batch(state, out):
-    """:func:`min_separation` of each formation of a batch (B, V, 16) -> out (B,)."""
-    for b in nb.prange(state.shape[0]):
-        out[b] = min_separation(state[b])

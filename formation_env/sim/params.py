@@ -1,6 +1,6 @@
 """Named parameter structs of the batched decision step (NamedTuples of scalars and arrays that
-numba compiles against): what never changes during a run. Built once per environment by
-:func:`step_params` from an :class:`~formation_env.envs.config.EnvConfig`.
+numba compiles against): what never changes during a run. Built once per environment from an
+:class:`~formation_env.envs.config.EnvConfig` by :class:`formation_env.envs.engine.FormationEpisode`.
 
 Shapes: V vehicles, K slot keyframes (padded), G scenario gusts, N lattice panels. Units SI,
 angles rad, frames NED (earth) and body (x forward, y starboard, z down).
@@ -18,7 +18,7 @@ from ..aircraft.envelope import DEFAULT_LIMITS
 from ..aircraft.kernels import pack as pack_aircraft
 from ..atmosphere.dryden import DrydenConfig
 from ..atmosphere.frozen_field import FrozenFieldParams, frozen_field_params
-from ..control.law import FCSParams, fcs_params
+from ..control.law import FCSParams
 from ..wake.arrays import WakeArrays, wake_arrays
 from .kernels import pack_limits
 

@@ -46,7 +46,7 @@ from ..control.law import fcs_update
 from ..frames import quaternion_dcm_terms
 from .guidance import formation_demands, gust_wind_ned, reference_path, schedule_features
 from ..wake.benefit import induced_drag_saving_one
-from ..wake.kernels import evaluate_one
+from ..wake.arrays import evaluate_formation
 from .kernels import ell_inputs, min_separation, step_one
 from .observe import observe_formation, min_separation_each, reward_formation
 from .params import RESIDUAL, SETPOINTS, SURFACES, StepParams
@@ -158,15 +158,9 @@ def _control(p, s, b, actions, amb, vel, cmd):
 @nb.njit(cache=True, error_model="numpy")
 def _physics(p, s, b, cmd, amb, new_state, status):
     """ELL (when due) -> RK4 -> envelope of formation b, one dt (formation_env.sim.kernels.step_one)."""
-    w, ac = p.wake, p.aircraft
     update = s.step[b] % p.wake_update_every == 0
     step_one(s.aircraft[b], cmd, amb, np.zeros_like(amb), s.induced_wind_ned[b], s.induced_omega_body[b],
-             s.circulation[b], update, p.wake_on, w.wing_origin_body, w.knot_x1_b, w.knot_x3_b, w.knot_vehicle,
-             w.knot_surface, w.surface_origin_b, w.surface_vehicle, w.surface_knot_start, w.surface_panel_start,
-             w.surface_core_scale, w.panel_left_knot, w.panel_vehicle, w.control_b, w.normal_b, w.aic_static, w.eval_b,
-             w.grad_w, w.vehicle_panel_start, w.cutoff_m, w.core_mode, w.aic_core_mode, w.kinematic_viscosity,
-             p.dt_s, ac.scalars, ac.prop_J, ac.prop_CT, ac.prop_CP, ac.engine_rpm, ac.engine_map, ac.engine_power,
-             ac.engine_fuel, ac.atm_T, ac.atm_P, ac.atm_rho, ac.atm_a, ac.limits, new_state, status)
+             s.circulation[b], update, p.wake_on, p.wake, p.aircraft, p.dt_s, new_state, status)
 
 
 @nb.njit(cache=True, error_model="numpy")
@@ -186,12 +180,8 @@ def formation_benefit(p, s, b, amb, out_saving):
     speed, alpha, beta = np.empty(nv), np.empty(nv), np.empty(nv)
     ell_inputs(s.aircraft[b], amb, w.wing_origin_body, pos, euler, speed, alpha, beta)
     gamma = np.empty(w.panel_left_knot.shape[0])
-    evaluate_one(pos, euler, speed, alpha, beta, w.knot_x1_b, w.knot_x3_b, w.knot_vehicle, w.knot_surface,
-                 w.surface_origin_b, w.surface_vehicle, w.surface_knot_start, w.surface_panel_start,
-                 w.surface_core_scale, w.panel_left_knot, w.panel_vehicle, w.control_b, w.normal_b, w.aic_static,
-                 w.eval_b, w.grad_w, w.vehicle_panel_start, w.cutoff_m, w.core_mode, w.aic_core_mode,
-                 w.kinematic_viscosity, gamma, np.empty((gamma.shape[0], 3)), np.empty((nv, 3)), np.empty((nv, 3)),
-                 np.empty((nv, 3)), np.empty((nv, 3)))
+    evaluate_formation(w, pos, euler, speed, alpha, beta, gamma, np.empty((gamma.shape[0], 3)), np.empty((nv, 3)),
+                       np.empty((nv, 3)), np.empty((nv, 3)), np.empty((nv, 3)))
     induced_drag_saving_one(w, p.wake_alone, pos, euler, speed, alpha, beta, gamma, out_saving)
 
 

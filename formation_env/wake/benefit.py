@@ -26,7 +26,8 @@ from __future__ import annotations
 import numba as nb
 import numpy as np
 
-from .kernels import CORE_NONE, evaluate_one, field_velocity, posed_lattice
+from .arrays import evaluate_formation
+from .kernels import CORE_NONE, field_velocity, posed_lattice
 
 __all__ = ["induced_drag_one", "isolated_induced_drag_one", "induced_drag_saving_one", "induced_drag_saving",
            "AIR_DENSITY_SL"]
@@ -105,11 +106,7 @@ def isolated_induced_drag_one(wake_alone, v, pos, euler, speed, alpha, beta, air
     omega_b = np.empty((1, 3))
     omega_ned = np.empty((1, 3))
     w = wake_alone
-    evaluate_one(pos1, eul1, sp1, al1, be1, w.knot_x1_b, w.knot_x3_b, w.knot_vehicle, w.knot_surface,
-                 w.surface_origin_b, w.surface_vehicle, w.surface_knot_start, w.surface_panel_start,
-                 w.surface_core_scale, w.panel_left_knot, w.panel_vehicle, w.control_b, w.normal_b, w.aic_static,
-                 w.eval_b, w.grad_w, w.vehicle_panel_start, w.cutoff_m, w.core_mode, w.aic_core_mode,
-                 w.kinematic_viscosity, gamma, vpts, wind_ned, wind_b, omega_b, omega_ned)
+    evaluate_formation(w, pos1, eul1, sp1, al1, be1, gamma, vpts, wind_ned, wind_b, omega_b, omega_ned)
     d = np.empty(1)
     induced_drag_one(w, gamma, pos1, eul1, sp1, al1, be1, d, air_density)
     return d[0]
@@ -163,11 +160,7 @@ def induced_drag_saving(model, state, air_density: float = AIR_DENSITY_SL) -> np
         speed = np.ascontiguousarray(state.airspeed_mps[b], dtype=float)
         alpha = np.ascontiguousarray(state.alpha_rad[b], dtype=float)
         beta = np.ascontiguousarray(state.beta_rad[b], dtype=float)
-        evaluate_one(pos, euler, speed, alpha, beta, w.knot_x1_b, w.knot_x3_b, w.knot_vehicle, w.knot_surface,
-                     w.surface_origin_b, w.surface_vehicle, w.surface_knot_start, w.surface_panel_start,
-                     w.surface_core_scale, w.panel_left_knot, w.panel_vehicle, w.control_b, w.normal_b, w.aic_static,
-                     w.eval_b, w.grad_w, w.vehicle_panel_start, w.cutoff_m, w.core_mode, w.aic_core_mode,
-                     w.kinematic_viscosity, gamma, vpts, *scratch)
+        evaluate_formation(w, pos, euler, speed, alpha, beta, gamma, vpts, *scratch)
         if same:
             induced_drag_saving_one(wake, alone[0], pos, euler, speed, alpha, beta, gamma, out[b], air_density)
         else:

@@ -11,7 +11,7 @@ from formation_env.aircraft.state import N_STATES
 from formation_env.atmosphere.wind import WindInput
 from formation_env.envs.observations import (ALTITUDE_SCALE_M, CONTROLLER_STATE_SCALE, NEIGHBOUR_POSITION_SCALE_M,
                                              OBS_CLIP, OMEGA_REF, POSITION_SCALE_M, VELOCITY_SCALE_MPS, WIND_SCALE_MPS,
-                                             observation_size, slog)
+                                             slog)
 from formation_env.envs.rewards import huber
 from formation_env.frames import dcm_body_to_ned_from_quaternion, euler_from_quaternion
 
