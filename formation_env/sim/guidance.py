@@ -78,7 +78,7 @@ def slot_offset_and_rate(sc, j, t, out_off, out_rate):
 def formation_demands(sc, t, x, vel_ned, ref_pos, manoeuvre, jitter, out_pd, out_vd):
     """Demanded positions and velocities (V, 3) NED of one formation at time t. x (V, 16) the
     aircraft states, vel_ned (V, 3) their ground velocities, jitter (V, 3) the slot offset jitter
-    (track frame, m)."""
+    (track frame, m). Follower j's slot offset is staged in out_pd[j] / out_vd[j] before use."""
     reference_path(sc, t, ref_pos, manoeuvre, out_pd[0], out_vd[0])
     if x.shape[0] == 1:
         return
@@ -87,17 +87,17 @@ def formation_demands(sc, t, x, vel_ned, ref_pos, manoeuvre, jitter, out_pd, out
     else:
         chi = math.atan2(vel_ned[0, 1], vel_ned[0, 0])
     c, s = math.cos(chi), math.sin(chi)
-    off = out_pd[1].copy()
-    rate = out_vd[1].copy()
     for j in range(1, x.shape[0]):
+        off, rate = out_pd[j], out_vd[j]
         slot_offset_and_rate(sc, j, t, off, rate)
         ox, oy, oz = off[0] + jitter[j, 0], off[1] + jitter[j, 1], off[2] + jitter[j, 2]
+        r0, r1, r2 = rate[0], rate[1], rate[2]
         out_pd[j, 0] = x[0, 10] + (c * ox - s * oy)
         out_pd[j, 1] = x[0, 11] + (s * ox + c * oy)
         out_pd[j, 2] = x[0, 12] + oz
-        out_vd[j, 0] = vel_ned[0, 0] + (c * rate[0] - s * rate[1])
-        out_vd[j, 1] = vel_ned[0, 1] + (s * rate[0] + c * rate[1])
-        out_vd[j, 2] = vel_ned[0, 2] + rate[2]
+        out_vd[j, 0] = vel_ned[0, 0] + (c * r0 - s * r1)
+        out_vd[j, 1] = vel_ned[0, 1] + (s * r0 + c * r1)
+        out_vd[j, 2] = vel_ned[0, 2] + r2
 
 
 @_jit

@@ -97,9 +97,8 @@ def _sample_turbulence(p, s, b, scratch_n, out):
 
 
 @nb.njit(cache=True, error_model="numpy")
-def _ambient(p, s, b, t, out):
-    """Ambient wind (V, 3) NED m/s: scenario gusts + steady wind + turbulence at each UAV."""
-    g = np.empty(3)
+def _ambient(p, s, b, t, out, g):
+    """Ambient wind (V, 3) NED m/s: scenario gusts + steady wind + turbulence at each UAV (g: (3,) scratch)."""
     gust_wind_ned(p.scenario, t, g)
     for a in range(out.shape[0]):
         for k in range(3):
@@ -107,14 +106,10 @@ def _ambient(p, s, b, t, out):
 
 
 @nb.njit(cache=True, error_model="numpy")
-def _control(p, s, b, actions, amb, vel, cmd):
-    """Commands (V, 4) of formation b: the PID (with setpoint-shifted demands) and the agents."""
+def _control(p, s, b, actions, amb, vel, cmd, wind, pd, vd, rate, sig):
+    """Commands (V, 4) of formation b: the PID (with setpoint-shifted demands) and the agents.
+    wind (12,) zeroed, pd, vd (3,), rate (7,), sig (10,): scratch."""
     ap = p.action
-    wind = np.zeros(12)
-    pd = np.empty(3)
-    vd = np.empty(3)
-    rate = np.empty(s.controller.shape[2])
-    sig = np.empty(10)
     for a in range(cmd.shape[0]):
         agent = ap.agent_mask[a]
         if agent and ap.mode == SURFACES:
@@ -156,10 +151,11 @@ def _control(p, s, b, actions, amb, vel, cmd):
 
 
 @nb.njit(cache=True, error_model="numpy")
-def _physics(p, s, b, cmd, amb, new_state, status):
-    """ELL (when due) -> RK4 -> envelope of formation b, one dt (formation_env.sim.kernels.step_one)."""
+def _physics(p, s, b, cmd, amb, zero_turb, new_state, status):
+    """ELL (when due) -> RK4 -> envelope of formation b, one dt (formation_env.sim.kernels.step_one);
+    turbulence is in the ambient wind (NED), so the body-axis turbulence input is zero_turb (V, 3)."""
     update = s.step[b] % p.wake_update_every == 0
-    step_one(s.aircraft[b], cmd, amb, np.zeros_like(amb), s.induced_wind_ned[b], s.induced_omega_body[b],
+    step_one(s.aircraft[b], cmd, amb, zero_turb, s.induced_wind_ned[b], s.induced_omega_body[b],
              s.circulation[b], update, p.wake_on, p.wake, p.aircraft, p.dt_s, new_state, status)
 
 
@@ -202,7 +198,7 @@ def observe_one(p, s, b, out_obs):
     """Observation rows (V, D) of formation b at its current state."""
     nv = s.aircraft.shape[1]
     amb = np.empty((nv, 3))
-    _ambient(p, s, b, s.step[b] * p.dt_s, amb)
+    _ambient(p, s, b, s.step[b] * p.dt_s, amb, np.empty(3))
     sched = np.empty((nv, 10))
     schedule_features(p.scenario, s.step[b] * p.dt_s, s.slot_jitter[b], sched)
     observe_formation(s.aircraft[b], s.induced_wind_ned[b], s.induced_omega_body[b], amb, s.position_demand[b],
@@ -222,6 +218,9 @@ def decide_one(p, s, b, actions, o):
     scratch_n = np.empty(N_STREAMS_PER_LANE)
     status_any = np.zeros(nv, dtype=np.int64)
     min_sep = np.inf
+    # per-decision scratch (allocating inside the substep loop costs ~10 % of a step)
+    g3, zero_turb = np.empty(3), np.zeros((nv, 3))
+    wind12, pd3, vd3, rate7, sig10 = np.zeros(12), np.empty(3), np.empty(3), np.empty(s.controller.shape[2]), np.empty(10)
     # formation benefit: read off the last substep's ELL solve (its poses and circulation), which
     # the physics needs anyway; a fresh solve only when that substep had none
     ell_pos, ell_euler = np.empty((nv, 3)), np.empty((nv, 3))
@@ -232,13 +231,13 @@ def decide_one(p, s, b, actions, o):
         _velocity_ned(s.aircraft[b], vel)
         formation_demands(p.scenario, t, s.aircraft[b], vel, s.reference_position[b], s.manoeuvre[b],
                           s.slot_jitter[b], s.position_demand[b], s.velocity_demand[b])
-        _ambient(p, s, b, t, amb)
-        _control(p, s, b, actions, amb, vel, cmd)
+        _ambient(p, s, b, t, amb, g3)
+        _control(p, s, b, actions, amb, vel, cmd, wind12, pd3, vd3, rate7, sig10)
         solved_last = False
         if p.benefit_on and sub == p.substeps - 1 and s.step[b] % p.wake_update_every == 0:
             ell_inputs(s.aircraft[b], amb, p.wake.wing_origin_body, ell_pos, ell_euler, ell_speed, ell_alpha, ell_beta)
             solved_last = True
-        _physics(p, s, b, cmd, amb, new, status)
+        _physics(p, s, b, cmd, amb, zero_turb, new, status)
         if solved_last:  # step_one solved unless the formation was outside the envelope (gamma zeroed)
             solved_last = False
             for k in range(s.circulation.shape[1]):
@@ -254,10 +253,9 @@ def decide_one(p, s, b, actions, o):
             _advance_one(p.field, s.field, b, scratch_n)
             _sample_turbulence(p, s, b, scratch_n, s.gust_ned[b])
         if p.scenario.manoeuvres:  # the manoeuvring reference integrates on the physics grid
-            rp, rv = np.empty(3), np.empty(3)
-            reference_path(p.scenario, t, s.reference_position[b], s.manoeuvre[b], rp, rv)
+            reference_path(p.scenario, t, s.reference_position[b], s.manoeuvre[b], pd3, vd3)
             for k in range(3):
-                s.reference_position[b, k] += p.dt_s * rv[k]
+                s.reference_position[b, k] += p.dt_s * vd3[k]
         s.step[b] += 1
         d = min_separation(s.aircraft[b])
         if d < min_sep or d != d:
@@ -294,7 +292,7 @@ def decide_one(p, s, b, actions, o):
             induced_drag_saving_one(p.wake, p.wake_alone, ell_pos, ell_euler, ell_speed, ell_alpha, ell_beta,
                                     s.circulation[b], o.saving[b])
         else:
-            _ambient(p, s, b, s.step[b] * p.dt_s, amb)
+            _ambient(p, s, b, s.step[b] * p.dt_s, amb, g3)
             formation_benefit(p, s, b, amb, o.saving[b])
     remaining = max(p.episode_steps - s.step[b], 0) / p.substeps
     reward_formation(p.reward, o.slot_error_m[b], s.previous_error[b], actions, s.previous_action[b], o.saving[b],
