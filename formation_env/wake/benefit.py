@@ -27,6 +27,7 @@ import numba as nb
 import numpy as np
 
 from .arrays import evaluate_formation
+from .aic import assemble_and_solve
 from .kernels import CORE_NONE, field_velocity, posed_lattice
 
 __all__ = ["induced_drag_one", "isolated_induced_drag_one", "induced_drag_saving_one", "induced_drag_saving",
@@ -86,7 +87,8 @@ def induced_drag_one(wake, gamma, pos, euler, speed, alpha, beta, out_drag, air_
 @_jit
 def isolated_induced_drag_one(wake_alone, v, pos, euler, speed, alpha, beta, air_density=AIR_DENSITY_SL):
     """Induced drag (N) vehicle ``v`` of the formation would have alone at its pose and air data:
-    the single-vehicle lattice ``wake_alone`` solved by ``evaluate_one``, then :func:`induced_drag_one`."""
+    the single-vehicle lattice ``wake_alone`` solved (the joint solve of ``evaluate_one``), then
+    :func:`induced_drag_one`."""
     n = wake_alone.panel_left_knot.shape[0]
     pos1 = np.empty((1, 3))
     eul1 = np.empty((1, 3))
@@ -100,13 +102,16 @@ def isolated_induced_drag_one(wake_alone, v, pos, euler, speed, alpha, beta, air
     al1[0] = alpha[v]
     be1[0] = beta[v]
     gamma = np.empty(n)
-    vpts = np.empty((n, 3))
-    wind_ned = np.empty((1, 3))
-    wind_b = np.empty((1, 3))
-    omega_b = np.empty((1, 3))
-    omega_ned = np.empty((1, 3))
     w = wake_alone
-    evaluate_formation(w, pos1, eul1, sp1, al1, be1, gamma, vpts, wind_ned, wind_b, omega_b, omega_ned)
+    # the joint solve of evaluate_one (pose, AIC, circulation) without its effective-wind part,
+    # which a lone vehicle does not need: the same arithmetic, so the same circulation
+    rot, vel, trail, x1, x3, origin, bound_dir, chord_dir, r1, inv1, r3, inv3 = posed_lattice(
+        pos1, eul1, sp1, al1, be1, w.knot_x1_b, w.knot_x3_b, w.knot_vehicle, w.knot_surface, w.surface_origin_b,
+        w.surface_vehicle, w.surface_knot_start)
+    assemble_and_solve(x1, x3, bound_dir, chord_dir, trail, vel, rot, pos1, origin, sp1, w.knot_vehicle,
+                       w.knot_surface, w.surface_core_scale, w.panel_left_knot, w.panel_vehicle, w.control_b, w.normal_b,
+                       w.aic_static, w.cutoff_m, w.aic_core_mode, w.kinematic_viscosity, np.empty((n, n)), gamma, r1,
+                       inv1, r3, inv3)
     d = np.empty(1)
     induced_drag_one(w, gamma, pos1, eul1, sp1, al1, be1, d, air_density)
     return d[0]
