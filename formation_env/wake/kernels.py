@@ -32,7 +32,7 @@ from .biot_savart import (_MIN_CORE_M, _TINY_H, CORE_KURYLOWICH, CORE_LAMB_OSEEN
 from .field import field_velocity, field_velocity_batch
 from .posing import branch_directions, dcm_ned_to_body_1, place_lattice, posed_lattice, to_ned
 
-__all__ = ["evaluate_one", "evaluate_batch_serial", "evaluate_batch_parallel", "field_velocity_batch",
+__all__ = ["evaluate_one", "effective_wind", "evaluate_batch_serial", "evaluate_batch_parallel", "field_velocity_batch",
            "field_velocity", "assemble_and_solve", "static_aic", "lu_solve_inplace", "posed_lattice", "place_lattice",
            "dcm_ned_to_body_1", "to_ned", "branch_directions", "point_to_knots", "branch", "leg", "core_radius",
            "segment_velocity", "leg_velocity", "FOUR_PI", "CORE_NONE", "CORE_LAMB_OSEEN", "CORE_KURYLOWICH",
@@ -52,7 +52,6 @@ def evaluate_one(
 ):
     """One formation: pose, joint solve, induced velocity at the evaluation points (other
     vehicles only) and the effective translational and rotational wind per vehicle."""
-    nv = pos.shape[0]
     n_panels = panel_left_knot.shape[0]
     rot, vel, trail, x1, x3, origin, bound_dir, chord_dir, r1, inv1, r3, inv3 = posed_lattice(
         pos, euler, airspeed, alpha, beta, knot_x1_b, knot_x3_b, knot_vehicle, knot_surface,
@@ -71,8 +70,16 @@ def evaluate_one(
         vpts_out[j, 0] = wx
         vpts_out[j, 1] = wy
         vpts_out[j, 2] = wz
-    # Effective wind (Dogan method, Eqs. 4.4-4.7): mean, and the curl of a linear fit whose
-    # weights (least squares or the thesis's finite differences) were precomputed per vehicle.
+    effective_wind(rot, vpts_out, grad_w, vehicle_panel_start, wind_ned_out, wind_b_out, omega_b_out, omega_ned_out)
+
+
+@_jit
+def effective_wind(rot, vpts, grad_w, vehicle_panel_start, wind_ned_out, wind_b_out, omega_b_out, omega_ned_out):
+    """Effective induced wind of each vehicle (thesis Eqs. 4.4-4.7, Dogan's method): translational
+    wind = the mean of the induced velocities at its evaluation points (NED, and body axes); rotational
+    wind = the curl of a linear fit of them, whose weights ``grad_w`` (least squares or the thesis's
+    finite differences) were precomputed per vehicle. rot (V, 3, 3) NED -> body; vpts (N, 3) NED."""
+    nv = rot.shape[0]
     grad = np.empty((3, 3))
     for v in range(nv):
         j0 = vehicle_panel_start[v]
@@ -84,11 +91,11 @@ def evaluate_one(
             for c in range(3):
                 grad[a, c] = 0.0
         for j in range(j0, j1):
-            m0 += vpts_out[j, 0]
-            m1 += vpts_out[j, 1]
-            m2 += vpts_out[j, 2]
+            m0 += vpts[j, 0]
+            m1 += vpts[j, 1]
+            m2 += vpts[j, 2]
             for a in range(3):
-                vb = rot[v, a, 0] * vpts_out[j, 0] + rot[v, a, 1] * vpts_out[j, 1] + rot[v, a, 2] * vpts_out[j, 2]
+                vb = rot[v, a, 0] * vpts[j, 0] + rot[v, a, 1] * vpts[j, 1] + rot[v, a, 2] * vpts[j, 2]
                 for c in range(3):
                     grad[a, c] += grad_w[j, c] * vb
         inv = 1.0 / (j1 - j0)
