@@ -2,7 +2,11 @@
 PYTHON ?= python3
 VENV   ?= .venv
 PY      = $(VENV)/bin/python
-STAMP   = $(VENV)/.installed-$(shell cat pyproject.toml | cksum | cut -d' ' -f1)
+STAMP   = $(VENV)/.installed-$(shell cat pyproject.toml constraints.txt | cksum | cut -d' ' -f1)
+# What `make install` / `make test` install: the test stack, Ray (the RLlib tests skip without it; CI
+# runs them) and TorchRL (compat; it leaves torch and every other pin unchanged), with the CPU torch
+# build pinned by constraints.txt (pyproject only gives torch>=2.3).
+EXTRAS ?= test,distributed,compat
 OUT    ?=
 
 .PHONY: demo test bench verify report clean install
@@ -11,9 +15,9 @@ $(VENV)/bin/python:
 	$(PYTHON) -m venv $(VENV)
 	$(PY) -m pip install --quiet --upgrade pip
 
-# Re-install whenever pyproject.toml changes (the stamp name carries its checksum).
-$(STAMP): $(VENV)/bin/python pyproject.toml
-	$(PY) -m pip install --quiet -e ".[test]"
+# Re-install whenever pyproject.toml or constraints.txt changes (the stamp name carries their checksum).
+$(STAMP): $(VENV)/bin/python pyproject.toml constraints.txt
+	$(PY) -m pip install --quiet -c constraints.txt -e ".[$(EXTRAS)]"
 	rm -f $(VENV)/.installed-*
 	touch $(STAMP)
 

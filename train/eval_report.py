@@ -125,8 +125,13 @@ def _plots(out_dir: Path, results: dict[str, dict], scenario: str, *, overwrite:
     written = []
     labels = {k: lbl for k, lbl, _ in _TABLE}
     keys = [(k, labels[k]) for k in _PLOT_KEYS if all(k in results[n]["summary"] for n in names)]
-    fig, axes = plt.subplots(1, len(keys), figsize=(3.0 * len(keys), 3.2))
-    for ax, (k, lbl) in zip(np.atleast_1d(axes), keys):
+    # a compact grid of small panels (up to 3 columns), not one long strip of bars
+    ncols = max(1, min(3, len(keys)))
+    nrows = max(1, -(-len(keys) // ncols))
+    fig, axes = plt.subplots(nrows, ncols, figsize=(2.9 * ncols, 2.4 * nrows), squeeze=False)
+    for ax in axes.flat[len(keys):]:
+        ax.set_visible(False)
+    for ax, (k, lbl) in zip(axes.flat, keys):
         summ = [results[n]["summary"] for n in names]
         vals = [s[k] for s in summ]
         yerr = None
@@ -135,8 +140,11 @@ def _plots(out_dir: Path, results: dict[str, dict], scenario: str, *, overwrite:
             lbl += " (95 % CI)"
         ax.bar(range(len(names)), vals, yerr=yerr, capsize=3, color=[f"C{i}" for i in range(len(names))])
         ax.set_xticks(range(len(names)), names, rotation=30, ha="right", fontsize=8)
-        ax.set_title(lbl, fontsize=9)
-    fig.suptitle(f"{scenario}: held-out episodes, wake + Dryden turbulence")
+        ax.set_title(lbl, fontsize=8)
+        ax.tick_params(axis="y", labelsize=7)
+        ax.ticklabel_format(axis="y", useOffset=False)
+        ax.grid(True, axis="y", alpha=0.3)
+    fig.suptitle(f"{scenario}: held-out episodes, wake + Dryden turbulence", fontsize=10)
     fig.tight_layout()
     written.append(str(atomic_write(out_dir / "metrics.png", lambda p: fig.savefig(p, dpi=110, format="png"), overwrite=overwrite)))
     plt.close(fig)

@@ -69,6 +69,8 @@ __all__ = ["EvalPolicy", "load_policy", "run_episodes", "summarise", "evaluate",
            "comparisons", "seed_groups", "group_report", "BASELINES", "TEST_EPISODES", "SUCCESS_WINDOW_S", "SPAN_M",
            "selection_score", "markdown_table", "comparison_table", "groups_table"]
 
+MAX_EPISODES = 10_000                  # episodes per policy at most (they fly as one batch)
+MAX_DURATION_S = 3600.0                # longest episode a duration override may ask for, s
 TEST_EPISODES = 100                    # held-out test episodes per policy by default
 
 
@@ -93,8 +95,11 @@ def evaluate(policies: Sequence[str], *, scenario: str, episodes: int = TEST_EPI
         raise ValueError(f"unknown scenario {scenario!r}; available: {scenario_names()}")
     if not policies:
         raise ValueError("give at least one policy (a .zip path, an RLlib checkpoint, 'pid' or 'pid_formation')")
-    if isinstance(episodes, bool) or not isinstance(episodes, int) or episodes < 1:
-        raise ValueError(f"episodes must be an integer >= 1, got {episodes!r}")
+    if isinstance(episodes, bool) or not isinstance(episodes, int) or not 1 <= episodes <= MAX_EPISODES:
+        raise ValueError(f"episodes must be an integer in [1, {MAX_EPISODES}], got {episodes!r}")
+    if duration_s is not None and not (isinstance(duration_s, (int, float)) and math.isfinite(duration_s)
+                                       and 0 < duration_s <= MAX_DURATION_S):
+        raise ValueError(f"duration must be a number of seconds in (0, {MAX_DURATION_S:g}], got {duration_s!r}")
     if not (isinstance(turbulence_sigma_mps, (int, float)) and math.isfinite(turbulence_sigma_mps) and turbulence_sigma_mps >= 0):
         raise ValueError(f"turbulence sigma must be a finite number >= 0, got {turbulence_sigma_mps!r}")
     if seeds is None or len(seeds) == 0:
@@ -103,8 +108,13 @@ def evaluate(policies: Sequence[str], *, scenario: str, episodes: int = TEST_EPI
         seeds = [int(seeds[0]) + i for i in range(episodes)]
     else:
         seeds = [int(s) for s in seeds]
-    if any(s < 0 for s in seeds):
-        raise ValueError(f"seeds must be >= 0, got {[s for s in seeds if s < 0]}")
+    if any(s < 0 or s >= 2 ** 63 for s in seeds):
+        raise ValueError(f"seeds must be in [0, 2**63), got {[s for s in seeds if s < 0 or s >= 2 ** 63]}")
+    if len(set(seeds)) != len(seeds):
+        raise ValueError(f"seeds must be distinct (each is one episode), got duplicates "
+                         f"{sorted({s for s in seeds if seeds.count(s) > 1})}")
+    if len(seeds) > MAX_EPISODES:
+        raise ValueError(f"at most {MAX_EPISODES} episodes (seeds), got {len(seeds)}")
     loaded, specs = [], {}
     for spec in policies:
         pol = load_policy(spec, action_mode=action_mode if spec not in BASELINES else None)

@@ -13,16 +13,17 @@ import importlib
 import sys
 
 from ..errors import ClusterUnreachableError, MissingDependencyError
+from ._args import OneLineArgumentParser, check_out_path
 
 COMMANDS = ("verify", "bench", "demo", "trim", "modes", "run", "report", "replay", "train", "evaluate")
 
 
 def build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(
+    parser = OneLineArgumentParser(
         prog="formation-env",
         description="Close-formation UAV simulator (ELL wake model + Aerosonde 6-DOF).",
     )
-    sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
+    sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND", parser_class=OneLineArgumentParser)
     for name in COMMANDS:
         try:
             module = importlib.import_module(f"{__name__}.{name}")
@@ -34,13 +35,24 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+def _one_line(exc: BaseException) -> str:
+    if isinstance(exc, OSError) and exc.filename is not None and exc.strerror:
+        text = f"{exc.strerror}: {str(exc.filename)!r}"  # e.g. a directory that cannot be created
+    else:
+        text = str(exc) or type(exc).__name__
+    return " ".join(text.split())
+
+
 def main(argv: list[str] | None = None) -> int:
+    """Run one subcommand. Bad arguments (argparse's, or a ValueError / FileExistsError / OSError raised by
+    the subcommand before or while writing) are one line on stderr and exit status 2, never a traceback."""
     parser = build_parser()
-    args = parser.parse_args(argv)
+    args = parser.parse_args(argv)  # usage errors: one line, SystemExit(2)
     try:
+        check_out_path(getattr(args, "out", None))
         return int(args.func(args) or 0)
-    except (ValueError, FileExistsError, MissingDependencyError, ClusterUnreachableError) as exc:
-        print(f"formation-env {args.command}: error: {exc}", file=sys.stderr)
+    except (ValueError, OSError, MissingDependencyError, ClusterUnreachableError) as exc:
+        print(f"formation-env {args.command}: error: {_one_line(exc)}", file=sys.stderr)
         return 2
 
 

@@ -6,6 +6,7 @@ import json
 import os
 import platform
 
+from ._args import nonneg_int, positive_int
 from ._optional import import_available
 
 BENCH_MODULES = ("formation_env.wake.bench", "formation_env.aircraft.bench", "formation_env.envs.bench")
@@ -21,10 +22,10 @@ def register(sub) -> None:
                    help="skip the runs with a competing busy process")
     p.add_argument("--rllib", action="store_true",
                    help="instead: RLlib env steps/s sampled with 1 and 2 env runners (needs the 'distributed' extra)")
-    p.add_argument("--runners", type=int, nargs="+", default=None, help="env runner counts for --rllib (default 1 2)")
+    p.add_argument("--runners", type=nonneg_int, nargs="+", default=None, help="env runner counts for --rllib (default 1 2)")
     p.add_argument("--action-mode", default=None, choices=("surfaces", "residual", "setpoints"),
                    help="action mode for --rllib (default residual)")
-    p.add_argument("--envs-per-runner", type=int, default=None, help="envs per env runner for --rllib (default 1)")
+    p.add_argument("--envs-per-runner", type=positive_int, default=None, help="envs per env runner for --rllib (default 1)")
     p.add_argument("--address", default=None, help="Ray cluster for --rllib (default: a local instance)")
     p.set_defaults(func=run)
 

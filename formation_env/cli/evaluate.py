@@ -7,6 +7,8 @@ from __future__ import annotations
 
 import time
 
+from ._args import MAX_DURATION_S, MAX_EPISODES, bounded_int, duration
+
 
 def _nonneg_float(text: str) -> float:
     import argparse
@@ -33,10 +35,12 @@ def register(sub) -> None:
                         "formation-keeping PID); repeat to compare several side by side (policies named "
                         "<name>_seed<k> are also reported as a seed group)")
     p.add_argument("--scenario", required=True, help=f"one of {scenario_names()}")
-    p.add_argument("--episodes", type=int, default=None,
-                   help=f"episodes per policy (default {TEST_EPISODES}, or the number of --seeds when several are given)")
-    p.add_argument("--seeds", type=int, nargs="+", default=None,
-                   help=f"one seed (the first of --episodes consecutive ones) or one per episode "
+    p.add_argument("--episodes", type=bounded_int(1, MAX_EPISODES), default=None,
+                   help=f"episodes per policy, 1..{MAX_EPISODES} (default {TEST_EPISODES}, or the number of --seeds "
+                        "when several are given; with several --seeds it must equal their number)")
+    p.add_argument("--seeds", type=bounded_int(0, 2 ** 63 - 1), nargs="+", default=None,
+                   help=f"one seed: the first of --episodes consecutive seeds; several: exactly one distinct seed "
+                        f"per episode (then --episodes, if given, must match their count) "
                         f"(default {TEST_SEED_BASE}.., never used in training)")
     p.add_argument("--turbulence", type=_nonneg_float, default=1.0, help="Dryden sigma, m/s, every axis (default 1)")
     p.add_argument("--turbulence-field", default="frozen", choices=("frozen", "independent"),
@@ -45,7 +49,8 @@ def register(sub) -> None:
     p.add_argument("--benefit", action="store_true", help="also compute the ELL induced-drag saving (slow)")
     p.add_argument("--action-mode", default=None, choices=ACTION_MODES,
                    help="action mode of the zips when no sidecar JSON / config.yaml says it")
-    p.add_argument("--duration", type=float, default=None, help="override the episode length, s")
+    p.add_argument("--duration", type=duration, default=None,
+                   help=f"override the episode length, s (at most {MAX_DURATION_S:g})")
     p.add_argument("--out", default=None, help="output directory (default runs/eval-<scenario>-<timestamp>)")
     p.add_argument("--overwrite", action="store_true", help="allow an existing non-empty output directory")
     p.add_argument("--no-plots", action="store_true", help="write only results.json and results.md")
@@ -57,6 +62,9 @@ def run(args) -> int:
 
     if args.episodes is not None and args.episodes < 1:
         raise ValueError(f"--episodes must be >= 1, got {args.episodes}")
+    if args.seeds and len(set(args.seeds)) != len(args.seeds):
+        dup = sorted({s for s in args.seeds if args.seeds.count(s) > 1})
+        raise ValueError(f"--seeds: duplicate seed(s) {dup} (each seed is one episode)")
     if args.seeds and len(args.seeds) > 1:
         if args.episodes is not None and args.episodes != len(args.seeds):
             raise ValueError(f"--episodes {args.episodes} disagrees with the {len(args.seeds)} seeds given by --seeds "
@@ -64,6 +72,9 @@ def run(args) -> int:
         args.episodes = len(args.seeds)
     elif args.episodes is None:
         args.episodes = TEST_EPISODES
+    from ..scenarios import get_scenario
+
+    get_scenario(args.scenario)  # unknown names fail before a policy loads
     out = args.out or f"runs/eval-{args.scenario}-{time.strftime('%Y%m%d-%H%M%S')}"
     rep = evaluate(args.policy, scenario=args.scenario, episodes=args.episodes, seeds=args.seeds,
                    turbulence_sigma_mps=args.turbulence, wake=not args.no_wake, compute_benefit=args.benefit,

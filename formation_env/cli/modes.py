@@ -7,6 +7,8 @@ pole set beside Tables A.11/A.12).
 
 from __future__ import annotations
 
+from ._args import finite_float
+
 import json
 from typing import Callable
 
@@ -43,9 +45,9 @@ SOURCES: dict[str, Callable] = {"open_loop": _open_loop, "closed_loop": _closed_
 
 def register(sub) -> None:
     p = sub.add_parser("modes", help="open-loop (Tables A.6/A.7) or closed-loop (A.11/A.12) modes about the trim")
-    p.add_argument("--speed", type=float, default=25.0, help="trim airspeed, m/s (default 25)")
-    p.add_argument("--altitude", type=float, default=1000.0, help="trim altitude, m (default 1000)")
-    p.add_argument("--fuel", type=float, default=2.0, help="fuel, kg (default 2)")
+    p.add_argument("--speed", type=finite_float, default=25.0, help="trim airspeed, m/s (default 25)")
+    p.add_argument("--altitude", type=finite_float, default=1000.0, help="trim altitude, m (default 1000)")
+    p.add_argument("--fuel", type=finite_float, default=2.0, help="fuel, kg (default 2)")
     p.add_argument("--alpha-dot", action="store_true",
                    help="include the alpha-dot terms (the thesis tables omit them, as Simulink linmod does)")
     p.add_argument("--closed-loop", dest="source", action="store_const", const="closed_loop", default="open_loop",

@@ -6,6 +6,8 @@ from __future__ import annotations
 import json
 import time
 
+from ._args import MAX_DURATION_S, duration
+
 
 def register(sub) -> None:
     from ..scenarios import scenario_names
@@ -15,7 +17,8 @@ def register(sub) -> None:
     p.add_argument("--no-wake", action="store_true", help="fly without the ELL wake interaction")
     p.add_argument("--out", default=None, help="output directory (default results/run-<scenario>-<timestamp>)")
     p.add_argument("--overwrite", action="store_true", help="allow writing into an existing non-empty directory")
-    p.add_argument("--duration", type=float, default=None, help="override the scenario's duration, s")
+    p.add_argument("--duration", type=duration, default=None,
+                   help=f"override the scenario's duration, s (at most {MAX_DURATION_S:g})")
     p.add_argument("--no-figures", action="store_true", help="write only metrics.json")
     p.set_defaults(func=run)
 
@@ -24,7 +27,9 @@ def run(args) -> int:
     from ..scenarios import get_scenario
     from ..runs.runner import run_scenario_to_dir
 
-    get_scenario(args.scenario)  # unknown names fail before anything is created
+    sc = get_scenario(args.scenario)  # unknown names fail before anything is created
+    if args.duration is not None and args.duration < sc.dt:
+        raise ValueError(f"--duration {args.duration:g}: shorter than one step of {sc.name!r} ({sc.dt:g} s)")
     out = args.out or f"results/run-{args.scenario}-{time.strftime('%Y%m%d-%H%M%S')}"
     metrics = run_scenario_to_dir(args.scenario, out, wake=not args.no_wake, overwrite=args.overwrite,
                                   duration_s=args.duration, figures=not args.no_figures)

@@ -79,6 +79,28 @@ def register(sub) -> None:
     p.set_defaults(func=run)
 
 
+def _check_config(path: str | None) -> None:
+    """A --config file must be a readable YAML mapping (checked before any training work)."""
+    import os
+
+    if path is None or not os.path.isfile(path):
+        return  # a missing file is reported by the trainer ("does not exist")
+    import yaml
+
+    try:
+        with open(path, encoding="utf-8") as f:
+            data = yaml.safe_load(f)
+    except UnicodeDecodeError:
+        raise ValueError(f"--config {path!r}: not a text (YAML) file") from None
+    except yaml.YAMLError as exc:
+        mark = getattr(exc, "problem_mark", None)
+        where = f" at line {mark.line + 1}, column {mark.column + 1}" if mark is not None else ""
+        problem = getattr(exc, "problem", None) or type(exc).__name__
+        raise ValueError(f"--config {path!r}: invalid YAML{where}: {problem}") from None
+    if data is not None and not isinstance(data, dict):
+        raise ValueError(f"--config {path!r}: must be a YAML mapping of hyperparameters, got a {type(data).__name__}")
+
+
 _RLLIB_ONLY = ("iterations", "num_env_runners", "num_envs_per_env_runner", "policies", "learning", "address",
                "num_cpus")
 
@@ -88,6 +110,7 @@ def run(args) -> int:
         raise ValueError("--resume and --overwrite exclude each other")
     if args.num_cpus is not None and args.address is not None:
         raise ValueError("--num-cpus applies only to a local Ray instance (without --address)")
+    _check_config(args.config)
     command = "formation-env " + " ".join(shlex.quote(a) for a in sys.argv[1:]) if sys.argv[1:2] == ["train"] else None
     if args.backend == "rllib":
         from train.rllib_backend import train_rllib

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from ._args import finite_float
+
 import json
 
 import numpy as np
@@ -9,12 +11,12 @@ import numpy as np
 
 def register(sub) -> None:
     p = sub.add_parser("trim", help="trim the Aerosonde 6-DOF model (thesis Table A.5 by default)")
-    p.add_argument("--speed", type=float, default=25.0, help="airspeed, m/s (default 25)")
-    p.add_argument("--altitude", type=float, default=1000.0, help="altitude, m (default 1000)")
-    p.add_argument("--fuel", type=float, default=2.0, help="fuel on board, kg (default 2)")
-    p.add_argument("--climb-angle", type=float, default=0.0, metavar="DEG",
+    p.add_argument("--speed", type=finite_float, default=25.0, help="airspeed, m/s (default 25)")
+    p.add_argument("--altitude", type=finite_float, default=1000.0, help="altitude, m (default 1000)")
+    p.add_argument("--fuel", type=finite_float, default=2.0, help="fuel on board, kg (default 2)")
+    p.add_argument("--climb-angle", type=finite_float, default=0.0, metavar="DEG",
                    help="flight-path angle, deg, + climbing (default 0)")
-    p.add_argument("--turn-rate", type=float, default=0.0, metavar="DEG_S",
+    p.add_argument("--turn-rate", type=finite_float, default=0.0, metavar="DEG_S",
                    help="turn rate, deg/s, + right (default 0)")
     p.add_argument("--gravity", choices=("constant", "wgs84"), default="constant",
                    help="gravity model: constant 9.81 (reproduces the thesis) or WGS-84 at 45N")

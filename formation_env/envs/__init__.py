@@ -1,15 +1,17 @@
 """Reinforcement-learning environments: PettingZoo parallel/AEC and single-agent Gymnasium."""
 
 from .config import ACTION_MODES, EnvConfig, Randomisation, RewardWeights
+from .core import INFO_REWARD_KEYS
 from .gym_env import GYM_IDS, FormationGymEnv, register_envs
 from .parallel import FormationParallelEnv
 
 __all__ = ["ACTION_MODES", "EnvConfig", "Randomisation", "RewardWeights", "FormationParallelEnv", "FormationGymEnv",
-           "GYM_IDS", "register_envs", "parallel_env", "env"]
+           "GYM_IDS", "register_envs", "parallel_env", "env", "INFO_REWARD_KEYS"]
 
 
 def parallel_env(scenario: str = "formation_keeping", render_mode: str | None = None, **options) -> FormationParallelEnv:
-    """The PettingZoo ParallelEnv of ``scenario`` (options: see :class:`EnvConfig`)."""
+    """The PettingZoo ParallelEnv of ``scenario`` (options: see :class:`EnvConfig`; an unknown option raises
+    ``TypeError``, a bad value ``ValueError``)."""
     return FormationParallelEnv(render_mode=render_mode, scenario=scenario, **options)
 
 

@@ -5,6 +5,8 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field, fields
 
+import numpy as np
+
 __all__ = ["ACTION_MODES", "OBS_MODES", "TURBULENCE_FIELDS", "RewardWeights", "Randomisation", "EnvConfig"]
 
 ACTION_MODES = ("surfaces", "residual", "setpoints")
@@ -160,9 +162,14 @@ class EnvConfig:
                 raise ValueError(f"EnvConfig: learning must be 'all', 'followers' or a tuple of indices, got {self.learning!r}")
         else:
             try:
-                idx = tuple(int(i) for i in self.learning)
-            except (TypeError, ValueError):
+                items = tuple(self.learning)
+            except TypeError:
                 raise ValueError(f"EnvConfig: learning must be 'all', 'followers' or a tuple of indices, got {self.learning!r}") from None
+            bad = [i for i in items if isinstance(i, bool) or not isinstance(i, (int, np.integer))]
+            if bad:
+                raise ValueError(f"EnvConfig: learning indices must be integers (UAV indices), got {bad[0]!r} "
+                                 f"in {self.learning!r}")
+            idx = tuple(int(i) for i in items)
             if not idx or len(set(idx)) != len(idx):
                 raise ValueError(f"EnvConfig: learning indices must be non-empty and unique, got {self.learning!r}")
             object.__setattr__(self, "learning", idx)

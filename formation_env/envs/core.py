@@ -12,8 +12,22 @@ import numpy as np
 from .config import EnvConfig
 from .engine import AEROSONDE_SPAN_M, FormationEpisode
 from .observations import observation_size
+from ..sim.observe import REWARD_TERMS
 
-__all__ = ["FormationCore", "AEROSONDE_SPAN_M"]
+__all__ = ["FormationCore", "AEROSONDE_SPAN_M", "INFO_REWARD_KEYS", "reward_info_key"]
+
+_REWARD_TERM_NAMES = (*REWARD_TERMS, "total")
+
+
+def reward_info_key(term: str) -> str:
+    """The flat info key of a reward term: ``"slot"`` -> ``"reward_slot"`` (``"total"``: the reward itself)."""
+    if term not in _REWARD_TERM_NAMES:
+        raise ValueError(f"unknown reward term {term!r}; terms: {list(_REWARD_TERM_NAMES)}")
+    return f"reward_{term}"
+
+
+#: the flat info keys of the reward's terms, in REWARD_TERMS order, then ``reward_total``
+INFO_REWARD_KEYS = tuple(reward_info_key(t) for t in _REWARD_TERM_NAMES)
 
 
 class FormationCore:
@@ -49,6 +63,7 @@ class FormationCore:
         self.obs_size = observation_size(n)
         self._actions = np.zeros((self.engine.batch_size, n, 4))
         self.last_terms: dict | None = None
+        self._fresh = np.ones(self.engine.batch_size, dtype=bool)  # reset, not stepped since: reward infos are 0
 
     @property
     def batch_size(self) -> int:
@@ -80,6 +95,7 @@ class FormationCore:
 
     def reset(self, indices=None, seeds=None) -> None:
         self.engine.reset(indices, seeds)
+        self._fresh[slice(None) if indices is None else np.asarray(indices, dtype=np.int64)] = True
 
     def step(self, agent_actions: np.ndarray):
         """agent_actions (B, A, 4) in [-1, 1] (validated by the caller).
@@ -87,6 +103,7 @@ class FormationCore:
         self._actions[:, self.mask] = agent_actions
         out = self.engine.decide(self._actions)
         self.last_terms = True
+        self._fresh[:] = False
         return out.reward, out.terminated, out.truncated
 
     def observations(self) -> np.ndarray:
@@ -94,18 +111,22 @@ class FormationCore:
         return self.engine.out.observation
 
     def infos(self, i: int) -> list[dict]:
-        """Per-vehicle info dicts of formation ``i`` (agents' metrics)."""
+        """Per-vehicle info dicts of formation ``i`` (agents' metrics).
+
+        Flat: every value is a Python scalar or a numpy array, and the keys are the same at reset and
+        after every step (TorchRL builds its info specs from the reset infos). The reward's terms are
+        ``reward_<term>`` (:data:`INFO_REWARD_KEYS`; 0.0 at reset)."""
         eng, out = self.engine, self.engine.out
         err_vec = eng.state[i, :, 10:13] - eng.position_demand[i]
         gust = eng.turbulence_gust_ned(i)
-        terms = eng.reward_terms(i) if self.last_terms is not None else None
+        terms = None if self._fresh[i] else eng.reward_terms(i)
         result = []
         for v in range(eng.n_vehicles):
             info = {
                 "time_s": float(eng.time_s[i]),
                 "slot_error_m": float(out.slot_error_m[i, v]) if self.last_terms is not None else float(np.linalg.norm(err_vec[v])),
                 "slot_error_ned_m": err_vec[v].copy(),
-                "min_separation_m": float(_separation(eng.state[i])[v]),
+                "min_separation_m": float(_separation(eng.state[i], out.separation_m[i])[v]),
                 "induced_wind_ned_mps": eng.induced[i, v].copy(),
                 "induced_omega_body_rad_s": eng.omega[i, v].copy(),
                 "fuel_kg": float(eng.state[i, v, 13]),
@@ -117,15 +138,37 @@ class FormationCore:
             }
             if self.benefit_enabled:
                 info["induced_drag_saving"] = float(out.saving[i, v])
-            if terms is not None:
-                info["reward_terms"] = {k: float(t[v]) for k, t in terms.items()}
+            for key, name in zip(INFO_REWARD_KEYS, _REWARD_TERM_NAMES):
+                info[key] = 0.0 if terms is None else float(terms[name][v])
+            _finite_values(info)
             result.append(info)
         return result
 
 
-def _separation(x: np.ndarray) -> np.ndarray:
-    """(V,) distance from each UAV to its nearest neighbour, m (inf alone)."""
-    d = np.linalg.norm(x[:, None, 10:13] - x[None, :, 10:13], axis=-1)
+def _separation(x: np.ndarray, fallback: np.ndarray | None = None) -> np.ndarray:
+    """(V,) distance from each UAV to its nearest neighbour, m (inf alone); never NaN.
+
+    Pairs with a non-finite position (a UAV that diverged: its episode is ending) are left out;
+    a UAV with no finite pair gets ``fallback`` (the decision step's separation at the last finite
+    positions, ``StepOutput.separation_m``) where that is not NaN, else inf."""
+    with np.errstate(invalid="ignore", over="ignore"):
+        d = np.linalg.norm(x[:, None, 10:13] - x[None, :, 10:13], axis=-1)
+    d[~np.isfinite(d)] = np.inf
     np.fill_diagonal(d, np.inf)
-    with np.errstate(invalid="ignore"):
-        return d.min(axis=1)
+    sep = d.min(axis=1)
+    if fallback is not None and x.shape[0] > 1:
+        fb = np.asarray(fallback, dtype=float)
+        sep = np.where(~np.isfinite(sep) & ~np.isnan(fb), fb, sep)
+    return sep
+
+
+def _finite_values(info: dict) -> None:
+    """Infos never carry NaN or inf from a diverged UAV (its state is non-finite on the step that ends
+    its episode): non-finite numbers become 0.0 and non-finite array entries 0.0, except
+    ``min_separation_m``, which stays inf for a lone UAV (no neighbour)."""
+    for key, value in info.items():
+        if isinstance(value, float):
+            if not np.isfinite(value) and not (key == "min_separation_m" and value == np.inf):
+                info[key] = 0.0
+        elif isinstance(value, np.ndarray) and value.dtype.kind == "f" and not np.all(np.isfinite(value)):
+            info[key] = np.where(np.isfinite(value), value, 0.0)

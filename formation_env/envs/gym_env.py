@@ -16,7 +16,8 @@ formation_env/CloseFormation-v0          close_formation    follower (uav_1)
 
 Keyword arguments of ``gymnasium.make`` go to :class:`~formation_env.envs.config.EnvConfig`
 (e.g. ``action_mode="residual"``, ``randomisation=Randomisation(...)``), plus ``learner`` (the UAV
-index) and ``render_mode``.
+index; ``learning=(i,)`` means the same) and ``render_mode``. An unknown keyword raises ``TypeError``,
+a bad value ``ValueError``. Each id's ``spec.max_episode_steps`` is one full episode at 10 Hz.
 """
 
 from __future__ import annotations
@@ -40,20 +41,63 @@ GYM_IDS = {
 }
 
 
+def _default_learner(n_vehicles: int) -> int:
+    """The registered ids' learner: the first follower (uav_1), or the single UAV."""
+    return 1 if n_vehicles > 1 else 0
+
+
+def _episode_decisions(cfg: EnvConfig) -> int:
+    """Decisions in one full episode of ``cfg`` (duration x control rate): the ids' ``max_episode_steps``."""
+    from ..scenarios import Scenario, get_scenario
+
+    sc = cfg.scenario if isinstance(cfg.scenario, Scenario) else get_scenario(cfg.scenario)
+    duration = sc.duration_s if cfg.duration_s is None else cfg.duration_s
+    physics_steps = int(round(duration / sc.dt))  # as the engine counts them
+    substeps = max(1, int(round(1.0 / sc.dt / cfg.control_hz)))
+    return -(-physics_steps // substeps)  # the step truncates once the physics steps reach the duration
+
+
 class FormationGymEnv(gym.Env):
+    """One learning UAV (``learner``, default: uav_1, or uav_0 in a one-UAV scenario); the others fly the
+    PID baseline. ``learning=(i,)`` is accepted as a synonym of ``learner=i``; any ``learning`` that
+    selects more than one UAV raises ``ValueError`` (use :func:`formation_env.parallel_env` or the vector
+    envs for several learners)."""
+
     metadata = {"render_modes": ["rgb_array", "human"], "render_fps": 10}
 
-    def __init__(self, config: EnvConfig | None = None, learner: int = 1, render_mode: str | None = None, **options):
+    def __init__(self, config: EnvConfig | None = None, learner: int | None = None, render_mode: str | None = None,
+                 **options):
+        learning_given = "learning" in options or (config is not None and config.learning != "all")
         cfg = make_config(config, **options)
-        if isinstance(learner, bool) or not isinstance(learner, (int, np.integer)):
-            raise ValueError(f"learner must be a UAV index, got {learner!r}")
+        if learner is not None and (isinstance(learner, bool) or not isinstance(learner, (int, np.integer))):
+            raise ValueError(f"learner must be a UAV index (int), got {learner!r}")
+        from ..scenarios import Scenario, get_scenario
+
+        sc = cfg.scenario if isinstance(cfg.scenario, Scenario) else get_scenario(cfg.scenario)
+        n = sc.n_vehicles
+        if learning_given:
+            chosen = {"all": tuple(range(n)), "followers": tuple(range(1, n))}.get(cfg.learning, cfg.learning)
+            if len(chosen) != 1:
+                raise ValueError(
+                    f"learning={cfg.learning!r} selects {len(chosen)} UAVs of {n}, but a single-agent Gymnasium env has "
+                    "one learner: pass learner=i or learning=(i,), or use formation_env.parallel_env(...) / "
+                    "FormationVecEnv / FormationVectorEnv for several learners")
+            if learner is not None and int(learner) != chosen[0]:
+                raise ValueError(f"learner={learner!r} and learning={cfg.learning!r} disagree; give one of them")
+            learner = chosen[0]
+        elif learner is None:
+            learner = _default_learner(n)
+        if not 0 <= int(learner) < n:
+            raise ValueError(f"learner {learner!r} out of range for {n} UAV(s) in {cfg.scenario!r}")
         cfg = EnvConfig(**{**cfg.__dict__, "learning": (int(learner),)})
         self._par = FormationParallelEnv(cfg, render_mode=render_mode)
         self.config = cfg
+        self.learner = int(learner)
         self.agent = self._par.possible_agents[0]
         self.observation_space = self._par.observation_space(self.agent)
         self.action_space = self._par.action_space(self.agent)
         self.render_mode = render_mode
+        self.episode_decisions = _episode_decisions(cfg)
 
     def reset(self, *, seed: int | None = None, options: dict | None = None):
         super().reset(seed=seed)
@@ -74,7 +118,12 @@ class FormationGymEnv(gym.Env):
 
 
 def register_envs() -> None:
+    """Registers :data:`GYM_IDS`, each with ``max_episode_steps`` = the scenario's duration x 10 Hz (one
+    episode at the default control rate; the env truncates there itself too). With a longer
+    ``duration_s`` or a higher ``control_hz``, pass ``gym.make(id, max_episode_steps=N)`` (or ``-1``) so
+    Gymnasium's TimeLimit does not cut the episode short."""
     for env_id, (scenario, learner) in GYM_IDS.items():
         if env_id not in gym.registry:
             gym.register(env_id, entry_point="formation_env.envs.gym_env:FormationGymEnv",
-                         kwargs={"scenario": scenario, "learner": learner})
+                         max_episode_steps=_episode_decisions(EnvConfig(scenario=scenario)),
+                         kwargs={"scenario": scenario})

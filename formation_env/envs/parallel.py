@@ -28,14 +28,20 @@ __all__ = ["FormationParallelEnv", "make_config"]
 
 
 def make_config(config: EnvConfig | None = None, **options) -> EnvConfig:
-    """An EnvConfig from keyword options (unknown options raise ValueError naming them)."""
+    """An EnvConfig from keyword options.
+
+    An unknown option raises ``TypeError`` naming it (as Python does for an unexpected keyword argument;
+    wrappers such as TorchRL's ``GymEnv`` probe constructors with optional keywords and expect
+    ``TypeError``); a bad value of a known option raises ``ValueError`` (from :class:`EnvConfig`)."""
+    valid = set(EnvConfig.__dataclass_fields__)
+    unknown = sorted(set(options) - valid)
+    if unknown:
+        more = f" (and {unknown[1:]})" if len(unknown) > 1 else ""
+        raise TypeError(f"unknown option: got an unexpected keyword argument {unknown[0]!r}{more}; "
+                        f"valid options: {sorted(valid)}")
     if config is not None and not isinstance(config, EnvConfig):
         raise ValueError(f"config must be an EnvConfig, got {type(config).__name__}")
     if config is None:
-        valid = set(EnvConfig.__dataclass_fields__)
-        unknown = sorted(set(options) - valid)
-        if unknown:
-            raise ValueError(f"unknown option(s) {unknown}; valid options: {sorted(valid)}")
         return EnvConfig(**options)
     if options:
         raise ValueError("give either config or keyword options, not both")
@@ -150,7 +156,13 @@ class FormationParallelEnv(ParallelEnv):
             raise ValueError(f"missing actions for agent(s) {missing}")
         act = np.zeros((len(self.possible_agents), 4))
         for k, agent in enumerate(self.possible_agents):
-            a = np.asarray(actions[agent], dtype=float)
+            raw = np.asarray(actions[agent])
+            if np.iscomplexobj(raw):
+                raise ValueError(f"action of {agent!r} is complex ({raw.dtype}); actions must be real numbers in [-1, 1]")
+            try:
+                a = np.asarray(raw, dtype=float)
+            except (TypeError, ValueError):
+                raise ValueError(f"action of {agent!r} must be 4 real numbers, got {actions[agent]!r}") from None
             if a.shape != (4,):
                 raise ValueError(f"action of {agent!r} must have shape (4,), got {a.shape}")
             if not np.all(np.isfinite(a)):

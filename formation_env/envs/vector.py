@@ -33,6 +33,33 @@ from .parallel import make_config
 
 __all__ = ["FormationVecEnv", "FormationVectorEnv", "BatchedFormations"]
 
+_RENDER_MODES = ("rgb_array",)
+
+
+def _check_render_mode(render_mode) -> str | None:
+    if render_mode is not None and render_mode not in _RENDER_MODES:
+        raise ValueError(f"render_mode must be one of {list(_RENDER_MODES)} or None, got {render_mode!r}")
+    return render_mode
+
+
+def _formation_frames(owner, batch: "BatchedFormations") -> list[np.ndarray]:
+    """One RGB frame (H, W, 3) uint8 per env index: formation f's frame for each of its agents (the
+    same array object), drawn by one renderer kept on ``owner``."""
+    renderer = getattr(owner, "_renderer", None)
+    if renderer is None:
+        from .render import FormationRenderer
+
+        renderer = owner._renderer = FormationRenderer(batch.core.engine)
+    frames = [renderer.draw(f) for f in range(batch.n_formations)]
+    return [frames[i // batch.agents_per_formation] for i in range(batch.num_envs)]
+
+
+def _close_renderer(owner) -> None:
+    renderer = getattr(owner, "_renderer", None)
+    if renderer is not None:
+        renderer.close()
+        owner._renderer = None
+
 
 class BatchedFormations:
     """Shared logic of the vector envs: flat (num_envs, ...) arrays over a FormationCore."""
@@ -79,7 +106,12 @@ class BatchedFormations:
         return obs.reshape(self.num_envs, -1).astype(np.float32)
 
     def validate(self, actions) -> np.ndarray:
-        a = np.asarray(actions, dtype=float)
+        raw = np.asarray(actions)
+        if np.iscomplexobj(raw):
+            bad = np.nonzero(np.any(np.imag(raw).reshape(len(raw), -1) != 0, axis=1))[0].tolist() if raw.ndim else []
+            raise ValueError(f"actions are complex ({raw.dtype}; env index(es) with an imaginary part: {bad}); "
+                             "actions must be real numbers in [-1, 1]")
+        a = np.asarray(raw, dtype=float)
         if a.shape != (self.num_envs, 4):
             raise ValueError(f"actions must have shape ({self.num_envs}, 4), got {a.shape}")
         if not np.all(np.isfinite(a)):
@@ -115,15 +147,17 @@ class FormationVecEnv(VecEnv):
     """
 
     def __init__(self, n_formations: int, config: EnvConfig | None = None, seed: int | None = None,
-                 detailed_infos: bool = False, **options) -> None:
+                 detailed_infos: bool = False, render_mode: str | None = None, **options) -> None:
         cfg = make_config(config, **options)
         self.batch = BatchedFormations(n_formations, cfg, seed)
         self.config = cfg
         self.detailed_infos = bool(detailed_infos)
         obs_space = spaces.Box(-OBS_CLIP, OBS_CLIP, (self.batch.obs_size,), dtype=np.float32)
         act_space = spaces.Box(-1.0, 1.0, (4,), dtype=np.float32)
-        self.render_mode = None
+        self.render_mode = _check_render_mode(render_mode)
+        self._renderer = None
         super().__init__(self.batch.num_envs, obs_space, act_space)
+        self.metadata["render_fps"] = cfg.control_hz
         self._actions = None
         if seed is not None:
             self.batch.set_seed(seed)
@@ -167,7 +201,16 @@ class FormationVecEnv(VecEnv):
         return obs, rewards, terminated | truncated, infos
 
     def close(self) -> None:
-        pass
+        _close_renderer(self)
+
+    def get_images(self) -> list[np.ndarray]:
+        """One RGB frame (H, W, 3) uint8 per env index; the agents of a formation share its frame."""
+        return _formation_frames(self, self.batch)
+
+    def render(self, mode: str | None = None) -> np.ndarray | None:
+        """SB3's render: with ``render_mode="rgb_array"`` the frames of all env indices tiled into one
+        image (what ``VecVideoRecorder`` records); None (with a warning) without a render mode."""
+        return super().render(mode=mode)
 
     def get_attr(self, attr_name, indices=None):
         return [getattr(self, attr_name) for _ in self._get_indices(indices)]
@@ -186,9 +229,12 @@ class FormationVectorEnv(gym.vector.VectorEnv):
     """Gymnasium VectorEnv of ``n_formations`` formations with same-step autoreset: a finished
     sub-env's last observation and info are in ``infos["final_obs"]`` / ``infos["final_info"]``."""
 
-    metadata = {"autoreset_mode": AutoresetMode.SAME_STEP}
+    metadata = {"autoreset_mode": AutoresetMode.SAME_STEP, "render_modes": list(_RENDER_MODES), "render_fps": 10}
 
-    def __init__(self, n_formations: int, config: EnvConfig | None = None, seed: int | None = None, **options) -> None:
+    def __init__(self, n_formations: int, config: EnvConfig | None = None, seed: int | None = None,
+                 render_mode: str | None = None, **options) -> None:
+        self.render_mode = _check_render_mode(render_mode)
+        self._renderer = None
         cfg = make_config(config, **options)
         self.batch = BatchedFormations(n_formations, cfg, seed)
         self.config = cfg
@@ -218,3 +264,13 @@ class FormationVectorEnv(gym.vector.VectorEnv):
                 fi[i] = {"episode_return": float(ret[i]), "episode_length": int(length[i])}
             infos = {"final_obs": fo, "_final_obs": done.copy(), "final_info": fi, "_final_info": done.copy()}
         return obs, rewards, terminated, truncated, infos
+
+    def render(self) -> tuple[np.ndarray, ...] | None:
+        """A tuple of RGB frames (H, W, 3) uint8, one per sub-env (the agents of a formation share its
+        frame), as ``gymnasium.vector`` envs return; None without ``render_mode="rgb_array"``."""
+        if self.render_mode is None:
+            return None
+        return tuple(_formation_frames(self, self.batch))
+
+    def close_extras(self, **kwargs) -> None:
+        _close_renderer(self)

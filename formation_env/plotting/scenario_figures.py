@@ -10,7 +10,7 @@ from pathlib import Path
 import matplotlib.pyplot as plt
 import numpy as np
 
-from . import save_figure
+from . import no_offset, save_figure, vehicle_label
 
 __all__ = ["scenario_figures"]
 
@@ -21,13 +21,14 @@ def _lines(runs: dict):
     for label, run in runs.items():
         v = run.h["airspeed"].shape[1]
         for i in range(v):
-            name = f"UAV {i + 1}" + (f" ({label.replace('_', ' ')})" if len(runs) > 1 else "")
+            name = vehicle_label(i) + (f" ({label.replace('_', ' ')})" if len(runs) > 1 else "")
             yield run, i, name, _STYLES.get(label, "-")
 
 
 def _strip(runs: dict, title: str, panels) -> plt.Figure:
     fig, axes = plt.subplots(len(panels), 1, figsize=(8.0, 1.9 * len(panels)), sharex=True, constrained_layout=True)
-    for ax, (ylabel, fn) in zip(np.atleast_1d(axes), panels):
+    axes = np.atleast_1d(axes)
+    for ax, (ylabel, fn) in zip(axes, panels):
         for run, i, name, ls in _lines(runs):
             ax.plot(run.time, fn(run.h, i), ls, lw=1.0, label=name)
         ax.set_ylabel(ylabel)
@@ -35,7 +36,7 @@ def _strip(runs: dict, title: str, panels) -> plt.Figure:
     axes[0].set_title(title)
     axes[0].legend(fontsize=7, loc="best")
     axes[-1].set_xlabel("t (s)")
-    return fig
+    return no_offset(fig)
 
 
 def scenario_figures(runs: dict, out_dir, *, overwrite: bool = False) -> list[Path]:
@@ -81,5 +82,5 @@ def scenario_figures(runs: dict, out_dir, *, overwrite: bool = False) -> list[Pa
     for a in (a1, a2):
         a.grid(True, alpha=0.3)
     a1.legend(fontsize=7)
-    figs["trajectory"] = fig
+    figs["trajectory"] = no_offset(fig)
     return [save_figure(f, out / f"{name}_{key}.png", overwrite=overwrite) for key, f in figs.items()]

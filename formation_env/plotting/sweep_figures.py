@@ -26,6 +26,7 @@ import numpy as np
 
 from ..geometry import LiftingSurface, Vehicle, aerosonde
 from ..wake import FormationState, WakeModel
+from . import no_offset
 
 __all__ = ["section_4_2_4_wing", "effective_wind_sweep", "nseg_sweep_figure", "aerosonde_tailplane_figure",
            "NSEG_FIGURES", "AEROSONDE_FIGURES"]
@@ -100,7 +101,7 @@ def nseg_sweep_figure(figure: str, nsegs=(1, 2, 4, 6, 8, 10, 20), n_points: int 
     axes[0, 1].legend(fontsize=7, ncol=2)
     fig.suptitle(f"Fig. {figure}: effective induced velocity on the follower (body axes) against {caption}; "
                  f"V {airspeed:g} m/s, alpha 8 deg", fontsize=10)
-    return fig, data
+    return no_offset(fig), data
 
 
 def aerosonde_tailplane_figure(figure: str, n_points: int = 141):
@@ -131,4 +132,4 @@ def aerosonde_tailplane_figure(figure: str, n_points: int = 141):
     axes[0, 0].legend(fontsize=8)
     fig.suptitle(f"Fig. {figure}: Aerosonde follower's effective induced wind (body axes) against {caption}; "
                  f"V 25 m/s, alpha = theta = 3 deg", fontsize=10)
-    return fig, data
+    return no_offset(fig), data

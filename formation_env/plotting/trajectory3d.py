@@ -9,6 +9,7 @@ import numpy as np
 
 from ..replay.log import EpisodeLog
 from ..replay.view import draw_formation_3d, geometry_from_euler, vehicle_colour
+from . import no_offset, vehicle_label
 
 __all__ = ["trajectory_3d_figure"]
 
@@ -38,7 +39,7 @@ def trajectory_3d_figure(log: EpisodeLog, n_snapshots: int = 5, relative: bool =
         ax2 = fig.add_subplot(1, 2, 2, projection="3d")
         rel = p - p[:, :1]
         for i in range(log.n_vehicles):
-            ax2.plot(rel[:, i, 1], rel[:, i, 0], -rel[:, i, 2], "-", color=vehicle_colour(i), lw=1.0, label=f"uav_{i}")
+            ax2.plot(rel[:, i, 1], rel[:, i, 0], -rel[:, i, 2], "-", color=vehicle_colour(i), lw=1.0, label=vehicle_label(i))
         for k in snaps:  # the aircraft and their wake legs at the same instants, true scale, equal axes
             g = geometry_from_euler(rel[k], log.euler_rad[k], log.velocity_ned[k], wind[k])
             draw_formation_3d(ax2, g, labels=False, trails=rel.swapaxes(0, 1))
@@ -47,4 +48,4 @@ def trajectory_3d_figure(log: EpisodeLog, n_snapshots: int = 5, relative: bool =
         ax2.set_zlabel("altitude rel. (m)")
         ax2.set_title(f"relative to uav_0 (leader-fixed NED axes, true scale), {len(snaps)} instants", fontsize=9)
         ax2.legend(fontsize=7)
-    return fig
+    return no_offset(fig)

@@ -11,6 +11,7 @@ import numpy as np
 from ..geometry import LiftingSurface, Vehicle
 from ..verification.sweeps import Sweep
 from ..wake import FormationState, WakeModel
+from . import no_offset
 
 
 def figure_4_7_wing() -> Vehicle:
@@ -46,7 +47,7 @@ def trefftz_planes_figure(x_over_b=(-1.0, -3.0, -10.0, -30.0), airspeed=20.0, al
         ax.set_aspect("equal")
         fig.colorbar(cs, ax=ax, shrink=0.8, label="|v_yz| (m/s)")
     fig.suptitle(f"Induced velocity in Trefftz planes behind the Fig. 4.7 wing (V {airspeed} m/s, alpha {alpha_deg} deg, {core} core)")
-    return fig
+    return no_offset(fig)
 
 
 def sweeps_figure(sweeps: list[Sweep]):
@@ -74,4 +75,4 @@ def sweeps_figure(sweeps: list[Sweep]):
         for a in axes[:, col]:
             a.grid(alpha=0.3)
     fig.suptitle("Delta wing (Table 5.5) follower in the leader's wake: effective induced wind and lift increment")
-    return fig
+    return no_offset(fig)

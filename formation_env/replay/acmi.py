@@ -40,7 +40,8 @@ _WGS84_A = 6378137.0
 _WGS84_E2 = 6.69437999014e-3
 # Cranfield airfield (the thesis's home), a harmless default reference point.
 DEFAULT_REFERENCE = {"latitude_deg": 52.0722, "longitude_deg": -0.6164, "time": "2024-01-01T00:00:00Z"}
-_COLOURS = ("Blue", "Red", "Green", "Orange", "Violet", "Yellow", "Cyan", "Grey")
+# the colours ACMI 2.1 names, in the order of the figures' vehicle colours (matplotlib C0..C4)
+_COLOURS = ("Blue", "Orange", "Green", "Red", "Violet")
 _CUSTOM = ("InducedWindN", "InducedWindE", "InducedWindD", "InducedOmegaX", "InducedOmegaY", "InducedOmegaZ")
 
 

@@ -16,26 +16,38 @@ from ..io import atomic_write
 from .log import EpisodeLog
 from .view import draw_formation_3d, geometry_from_euler, vehicle_colour
 
-__all__ = ["write_animation", "frame_indices"]
+__all__ = ["write_animation", "frame_indices", "MAX_FRAMES"]
+
+
+MAX_FRAMES = 2000  # the most frames an animation may have (formation-env replay --max-frames)
 
 
 def frame_indices(log: EpisodeLog, fps: float, speedup: float, max_frames: int | None) -> np.ndarray:
-    """Sample indices giving ``fps`` frames per second of playback at ``speedup`` x real time."""
+    """Sample indices giving ``fps`` frames per second of playback at ``speedup`` x real time, at most
+    ``max_frames`` (an integer in [1, MAX_FRAMES]; None: MAX_FRAMES)."""
+    if max_frames is None:
+        max_frames = MAX_FRAMES
+    if isinstance(max_frames, bool) or not isinstance(max_frames, (int, np.integer)) or not 1 <= max_frames <= MAX_FRAMES:
+        raise ValueError(f"max_frames must be an integer in [1, {MAX_FRAMES}], got {max_frames!r}")
+    if not (np.isfinite(fps) and fps > 0 and np.isfinite(speedup) and speedup > 0):
+        raise ValueError(f"fps and speedup must be finite and > 0, got fps={fps!r}, speedup={speedup!r}")
     dt = float(np.median(np.diff(log.time_s))) if log.n_samples > 1 else 1.0
     step = max(1, int(round(speedup / (fps * dt))))
     idx = np.arange(0, log.n_samples, step)
-    if max_frames is not None and idx.size > max_frames:
+    if idx.size > max_frames:
         idx = np.unique(np.linspace(0, log.n_samples - 1, int(max_frames)).round().astype(int))
     return idx
 
 
 def write_animation(log: EpisodeLog, path, *, fps: float = 10.0, speedup: float = 4.0, max_frames: int | None = 200,
-                    trail_s: float = 8.0, dpi: int = 72, overwrite: bool = False, fixed_extent_m: float | None = None) -> Path:
+                    trail_s: float = 8.0, dpi: int = 72, overwrite: bool = False, fixed_extent_m: float | None = None,
+                    progress=None) -> Path:
     """Write ``log`` as an animation to ``path`` (``.gif``: Pillow; ``.mp4``: ffmpeg), atomically.
 
     ``speedup``: simulated seconds per playback second; ``trail_s``: seconds of past track drawn;
     ``fixed_extent_m``: half-size of the view cube following the formation (default: fits the
-    formation's largest separation over the episode plus the wake legs)."""
+    formation's largest separation over the episode plus the wake legs); ``progress``: called with each
+    frame's number (0-based) as it is rendered (a progress display)."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -88,7 +100,8 @@ def write_animation(log: EpisodeLog, path, *, fps: float = 10.0, speedup: float 
 
     def writer(tmp: Path) -> None:
         w = animation.PillowWriter(fps=fps) if suffix == ".gif" else animation.FFMpegWriter(fps=fps)
-        anim.save(str(tmp), writer=w, dpi=dpi)
+        cb = None if progress is None else (lambda i, n: progress(i))
+        anim.save(str(tmp), writer=w, dpi=dpi, progress_callback=cb)
 
     try:
         return atomic_write(path, writer, overwrite=overwrite)

@@ -29,7 +29,9 @@ from ..control.tracker import track_errors
 from ..sim import WakeConfig
 from ..scenarios import Scenario, get_scenario
 
-__all__ = ["ScenarioRun", "run_scenario", "scenario_metrics", "run_scenario_to_dir"]
+__all__ = ["ScenarioRun", "run_scenario", "scenario_metrics", "run_scenario_to_dir", "MAX_DURATION_S"]
+
+MAX_DURATION_S = 3600.0  # longest run a duration override may ask for (the histories are preallocated)
 
 
 @dataclass(frozen=True, eq=False)
@@ -56,8 +58,10 @@ def run_scenario(scenario: str | Scenario, wake: bool | None = None, duration_s:
     if not isinstance(sc, Scenario):
         raise ValueError(f"scenario must be a name or a Scenario, got {type(scenario).__name__}")
     wake = sc.wake_default if wake is None else bool(wake)
-    if duration_s is not None and not (math.isfinite(duration_s) and duration_s > 0):
-        raise ValueError(f"duration_s must be finite and > 0, got {duration_s!r}")
+    if duration_s is not None and not (math.isfinite(duration_s) and 0 < duration_s <= MAX_DURATION_S):
+        raise ValueError(f"duration_s must be in (0, {MAX_DURATION_S:g}] s, got {duration_s!r}")
+    if duration_s is not None and duration_s < sc.dt:
+        raise ValueError(f"duration_s {duration_s!r} is shorter than one step of {sc.name!r} ({sc.dt:g} s)")
     eng = FormationEpisode(EnvConfig(scenario=sc, wake=wake, duration_s=duration_s), 1, wake_config=wake_config)
     eng.reset(seeds=[0])  # nothing is randomised: the seed is not used
     n_steps, v = eng.n_steps, sc.n_vehicles
@@ -217,6 +221,8 @@ def run_scenario_to_dir(name: str, out_dir, wake: bool = True, overwrite: bool =
     from ..io import atomic_write_json, prepare_output_dir
 
     sc = get_scenario(name)
+    if duration_s is not None and not (math.isfinite(duration_s) and sc.dt <= duration_s <= MAX_DURATION_S):
+        raise ValueError(f"duration_s must be in [{sc.dt:g}, {MAX_DURATION_S:g}] s, got {duration_s!r}")
     out = prepare_output_dir(out_dir, overwrite=overwrite)
     runs = {}
     if sc.name == "formation_keeping":

@@ -4,7 +4,9 @@
 It fuses the same compiled kernels the wake and aircraft packages use
 (:func:`formation_env.wake.kernels.evaluate_one`, :func:`formation_env.aircraft.kernels.rk4_batch`),
 so there is no second implementation of the physics; only the envelope check is repeated here,
-and a test holds it equal to :func:`formation_env.aircraft.check_envelope`.
+and a test holds it equal to :func:`formation_env.aircraft.check_envelope`. The separations the
+decision step judges collisions by (never NaN, also across a step that diverges a UAV) are here too
+(:func:`step_separation`, :func:`separation_each_known`).
 """
 
 from __future__ import annotations
@@ -121,6 +123,21 @@ def step_one(state, controls, ambient, turb, held_wind, held_omega, gamma, updat
             ell_inputs(state, ambient, wake.wing_origin_body, pos, euler, speed, alpha, beta)
             evaluate_formation(wake, pos, euler, speed, alpha, beta, gamma, np.empty((wake.panel_left_knot.shape[0], 3)),
                                held_wind, np.empty((nv, 3)), held_omega, np.empty((nv, 3)))
+            # The ELL stays bounded at any separation (the overlap core); should a solve still come
+            # out non-finite (degenerate input), the formation flies without induced wind this step
+            # rather than feeding NaN to the aircraft.
+            finite = True
+            for a in range(nv):
+                for i in range(3):
+                    if not (math.isfinite(held_wind[a, i]) and math.isfinite(held_omega[a, i])):
+                        finite = False
+            if not finite:
+                for a in range(nv):
+                    for i in range(3):
+                        held_wind[a, i] = 0.0
+                        held_omega[a, i] = 0.0
+                for j in range(gamma.shape[0]):
+                    gamma[j] = 0.0
         else:
             for a in range(nv):
                 for i in range(3):
@@ -161,3 +178,60 @@ def min_separation(state):
             if d < best or d != d:
                 best = d
     return best
+
+
+@_jit
+def position_finite(x, a):
+    """Whether aircraft a's CG position (state x (V, 16)) is finite."""
+    return math.isfinite(x[a, 10]) and math.isfinite(x[a, 11]) and math.isfinite(x[a, 12])
+
+
+@_jit
+def step_separation(pre, pre_vel, post, dt):
+    """Smallest CG distance of any pair of one formation over one physics step, never NaN (inf when
+    no pair is known). A pair finite after the step: its distance after the step (as before). A pair
+    with an aircraft whose state went non-finite in this step: the closest approach over the step of
+    straight-line motion from the (finite) pre-step positions and velocities, so a step that both
+    overlaps two aircraft and makes a state non-finite still counts as a collision. A pair with an
+    aircraft non-finite before and after the step: unknown, skipped."""
+    nv = post.shape[0]
+    best = np.inf
+    for i in range(nv):
+        for j in range(i + 1, nv):
+            if position_finite(post, i) and position_finite(post, j):
+                d = math.sqrt((post[i, 10] - post[j, 10]) ** 2 + (post[i, 11] - post[j, 11]) ** 2
+                              + (post[i, 12] - post[j, 12]) ** 2)
+            elif position_finite(pre, i) and position_finite(pre, j):
+                dx = pre[i, 10] - pre[j, 10]
+                dy = pre[i, 11] - pre[j, 11]
+                dz = pre[i, 12] - pre[j, 12]
+                vx = pre_vel[i, 0] - pre_vel[j, 0]
+                vy = pre_vel[i, 1] - pre_vel[j, 1]
+                vz = pre_vel[i, 2] - pre_vel[j, 2]
+                if not (math.isfinite(vx) and math.isfinite(vy) and math.isfinite(vz)):
+                    vx = vy = vz = 0.0
+                v2 = vx * vx + vy * vy + vz * vz
+                t = 0.0 if v2 == 0.0 else min(max(-(dx * vx + dy * vy + dz * vz) / v2, 0.0), dt)
+                d = math.sqrt((dx + t * vx) ** 2 + (dy + t * vy) ** 2 + (dz + t * vz) ** 2)
+            else:
+                continue
+            if d < best:
+                best = d
+    return best
+
+
+@_jit
+def separation_each_known(last, known, out):
+    """(V,) distance from each UAV to its nearest neighbour at their last finite positions ``last``
+    (V, 3) (``known``: a finite position was seen); inf where nothing is known (never NaN)."""
+    nv = last.shape[0]
+    for i in range(nv):
+        best = np.inf
+        if known[i]:
+            for j in range(nv):
+                if j != i and known[j]:
+                    d = math.sqrt((last[i, 0] - last[j, 0]) ** 2 + (last[i, 1] - last[j, 1]) ** 2
+                                  + (last[i, 2] - last[j, 2]) ** 2)
+                    if d < best:
+                        best = d
+        out[i] = best

@@ -47,7 +47,10 @@ from ..frames import quaternion_dcm_terms
 from .guidance import formation_demands, gust_wind_ned, reference_path, schedule_features
 from ..wake.benefit import induced_drag_saving_one
 from ..wake.arrays import evaluate_formation
-from .kernels import ell_inputs, min_separation, step_one
+from .kernels import ell_inputs, step_one
+from .kernels import position_finite as _position_finite
+from .kernels import separation_each_known as _separation_each_known
+from .kernels import step_separation as _step_separation
 from .observe import observe_formation, min_separation_each, reward_formation
 from .params import RESIDUAL, SETPOINTS, SURFACES, StepParams
 from .state import SimState, StepOutput
@@ -208,7 +211,12 @@ def observe_one(p, s, b, out_obs):
 
 @nb.njit(cache=True, error_model="numpy")
 def decide_one(p, s, b, actions, o):
-    """One decision of formation b: substeps, then observation, reward and events into ``o``."""
+    """One decision of formation b: substeps, then observation, reward and events into ``o``.
+
+    Collision: the smallest CG separation over the decision's physics steps below the collision
+    separation (a step that also made a state non-finite is judged from its pre-step positions and
+    velocities, :func:`formation_env.sim.kernels.step_separation`). A UAV whose state went non-finite is measured (slot error,
+    separation) at its last finite position, so ``o`` never carries NaN."""
     nv = s.aircraft.shape[1]
     amb = np.empty((nv, 3))
     vel = np.empty((nv, 3))
@@ -226,6 +234,16 @@ def decide_one(p, s, b, actions, o):
     ell_pos, ell_euler = np.empty((nv, 3)), np.empty((nv, 3))
     ell_speed, ell_alpha, ell_beta = np.empty(nv), np.empty(nv), np.empty(nv)
     solved_last = False
+    # last finite CG position of each UAV (what the outputs measure a diverged UAV by) and the
+    # pre-step state of each physics step (its collision check when the step goes non-finite)
+    last_pos = np.empty((nv, 3))
+    known = np.zeros(nv, dtype=np.bool_)
+    pre = np.empty((nv, s.aircraft.shape[2]))
+    for a in range(nv):
+        if _position_finite(s.aircraft[b], a):
+            known[a] = True
+            for k in range(3):
+                last_pos[a, k] = s.aircraft[b, a, 10 + k]
     for sub in range(p.substeps):
         t = s.step[b] * p.dt_s
         _velocity_ned(s.aircraft[b], vel)
@@ -237,6 +255,7 @@ def decide_one(p, s, b, actions, o):
         if p.benefit_on and sub == p.substeps - 1 and s.step[b] % p.wake_update_every == 0:
             ell_inputs(s.aircraft[b], amb, p.wake.wing_origin_body, ell_pos, ell_euler, ell_speed, ell_alpha, ell_beta)
             solved_last = True
+        pre[:, :] = s.aircraft[b]
         _physics(p, s, b, cmd, amb, zero_turb, new, status)
         if solved_last:  # step_one solved unless the formation was outside the envelope (gamma zeroed)
             solved_last = False
@@ -257,9 +276,15 @@ def decide_one(p, s, b, actions, o):
             for k in range(3):
                 s.reference_position[b, k] += p.dt_s * vd3[k]
         s.step[b] += 1
-        d = min_separation(s.aircraft[b])
-        if d < min_sep or d != d:
+        # never NaN: a step that overlaps two UAVs is a collision even if it also diverged one of them
+        d = _step_separation(pre, vel, s.aircraft[b], p.dt_s)
+        if d < min_sep:
             min_sep = d
+        for a in range(nv):
+            if _position_finite(s.aircraft[b], a):
+                known[a] = True
+                for k in range(3):
+                    last_pos[a, k] = s.aircraft[b, a, 10 + k]
         stop = False
         for a in range(nv):
             if status_any[a] != 0:
@@ -275,12 +300,26 @@ def decide_one(p, s, b, actions, o):
     for a in range(nv):
         o.crashed[b, a] = status_any[a] != 0
         crashed_any = crashed_any or status_any[a] != 0
-        dx = s.aircraft[b, a, 10] - s.position_demand[b, a, 0]
-        dy = s.aircraft[b, a, 11] - s.position_demand[b, a, 1]
-        dz = s.aircraft[b, a, 12] - s.position_demand[b, a, 2]
-        o.slot_error_m[b, a] = math.sqrt(dx * dx + dy * dy + dz * dz)
+        # a UAV whose state went non-finite (crashed) is measured at its last finite position
+        px, py, pz = s.aircraft[b, a, 10], s.aircraft[b, a, 11], s.aircraft[b, a, 12]
+        if not _position_finite(s.aircraft[b], a) and known[a]:
+            px, py, pz = last_pos[a, 0], last_pos[a, 1], last_pos[a, 2]
+        dx = px - s.position_demand[b, a, 0]
+        dy = py - s.position_demand[b, a, 1]
+        dz = pz - s.position_demand[b, a, 2]
+        err = math.sqrt(dx * dx + dy * dy + dz * dz)
+        if not math.isfinite(err):  # no finite position or demand known: the previous error, else 0
+            err = s.previous_error[b, a] if math.isfinite(s.previous_error[b, a]) else 0.0
+        o.slot_error_m[b, a] = err
     min_separation_each(s.aircraft[b], o.separation_m[b])
+    finite_sep = True
+    for a in range(nv):
+        if o.separation_m[b, a] != o.separation_m[b, a]:
+            finite_sep = False
+    if not finite_sep:
+        _separation_each_known(last_pos, known, o.separation_m[b])
     o.collided[b] = collided
+    # inf (one UAV, or nothing known) stays inf as before; never NaN
     o.min_separation_m[b] = min_sep
     o.terminated[b] = collided or crashed_any
     o.truncated[b] = (not o.terminated[b]) and s.step[b] >= p.episode_steps

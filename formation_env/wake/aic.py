@@ -7,7 +7,7 @@ from __future__ import annotations
 import numba as nb
 import numpy as np
 
-from .biot_savart import CORE_NONE, branch, core_radius, leg, point_to_knots
+from .biot_savart import CORE_NONE, branch, branch_cored, core_radius, leg, leg_cored, point_to_knots
 from .posing import branch_directions, to_ned
 
 __all__ = ["lu_solve_inplace", "static_aic", "assemble_and_solve"]
@@ -93,7 +93,7 @@ def static_aic(knot_x1_b, knot_x3_b, knot_vehicle, knot_surface, surface_knot_st
 def assemble_and_solve(
     x1, x3, bound_dir, chord_dir, trail, vel, rot, pos, origin, airspeed,
     knot_vehicle, knot_surface, surface_core_scale, panel_left_knot, panel_vehicle,
-    control_b, normal_b, aic_static, cutoff, aic_core_mode, nu, aic, gamma, r1, inv1, r3, inv3,
+    control_b, normal_b, aic_static, cutoff, aic_core_mode, nu, overlap_core, aic, gamma, r1, inv1, r3, inv3,
 ):
     """Build the AIC over every panel of every vehicle and solve for the circulations (4.25-4.69).
 
@@ -101,7 +101,11 @@ def assemble_and_solve(
     All branches use the plain Biot-Savart law with the Eq. 4.31 cutoff (the thesis), except that
     ``aic_core_mode`` != CORE_NONE gives the *other* vehicles' trailing legs the viscous core of the
     field law, so that a leg passing a control point does not produce a near-singular response.
-    A vehicle's own bound and chordwise branches come from ``aic_static`` (see :func:`static_aic`).
+    ``overlap_core`` > 0 (m): the *other* vehicles' branches carry the overlap core of that radius
+    (:func:`branch_cored`, :func:`leg_cored`: about their lifting surface; legs never thinner than the
+    cutoff), so that overlapping or coincident vehicles keep a well-conditioned AIC; 0: without it.
+    A vehicle's own bound and chordwise branches come from ``aic_static`` (see :func:`static_aic`),
+    its own legs are plain with the cutoff: the own part is the thesis's exactly.
     """
     n_panels = panel_left_knot.shape[0]
     n_knots = x1.shape[0]
@@ -121,19 +125,23 @@ def assemble_and_solve(
             rc = 0.0
             if aic_core_mode != CORE_NONE and src != vj:
                 rc = core_radius(cp[0], cp[1], cp[2], origin, knot_surface[k], airspeed[src], surface_core_scale, aic_core_mode, nu)
-            lx, ly, lz = leg(t[0], t[1], t[2], r3[k, 0], r3[k, 1], r3[k, 2], inv3[k], cutoff, rc)
+            if src != vj:
+                lx, ly, lz = leg_cored(t[0], t[1], t[2], r3[k, 0], r3[k, 1], r3[k, 2], inv3[k], cutoff, rc, overlap_core)
+            else:
+                lx, ly, lz = leg(t[0], t[1], t[2], r3[k, 0], r3[k, 1], r3[k, 2], inv3[k], cutoff, rc)
             lw[k] = lx * nrm[0] + ly * nrm[1] + lz * nrm[2]
             if src != vj:
-                sx, sy, sz = branch(chord_dir[k, 0], chord_dir[k, 1], chord_dir[k, 2], r3[k, 0], r3[k, 1], r3[k, 2],
-                                    inv3[k], r1[k, 0], r1[k, 1], r1[k, 2], inv1[k], cutoff)
+                sx, sy, sz = branch_cored(chord_dir[k, 0], chord_dir[k, 1], chord_dir[k, 2], r3[k, 0], r3[k, 1], r3[k, 2],
+                                          inv3[k], r1[k, 0], r1[k, 1], r1[k, 2], inv1[k], cutoff, overlap_core)
                 cw[k] = sx * nrm[0] + sy * nrm[1] + sz * nrm[2]
         for p in range(n_panels):
             k = panel_left_knot[p]
             if panel_vehicle[p] == vj:
                 aic[j, p] = aic_static[j, p] - lw[k] + lw[k + 1]
             else:
-                bx, by, bz = branch(bound_dir[k, 0], bound_dir[k, 1], bound_dir[k, 2], r1[k, 0], r1[k, 1], r1[k, 2],
-                                    inv1[k], r1[k + 1, 0], r1[k + 1, 1], r1[k + 1, 2], inv1[k + 1], cutoff)
+                bx, by, bz = branch_cored(bound_dir[k, 0], bound_dir[k, 1], bound_dir[k, 2], r1[k, 0], r1[k, 1], r1[k, 2],
+                                          inv1[k], r1[k + 1, 0], r1[k + 1, 1], r1[k + 1, 2], inv1[k + 1], cutoff,
+                                          overlap_core)
                 aic[j, p] = (cw[k] - lw[k]) + bx * nrm[0] + by * nrm[1] + bz * nrm[2] - (cw[k + 1] - lw[k + 1])
         gamma[j] = vel[vj, 0] * nrm[0] + vel[vj, 1] * nrm[1] + vel[vj, 2] * nrm[2]
     lu_solve_inplace(aic, gamma)

@@ -38,6 +38,7 @@ class WakeArrays(NamedTuple):
     core_mode: int
     aic_core_mode: int
     kinematic_viscosity: float
+    overlap_core_m: float  # minimum core of the other vehicles' branches, m (WakeModel.overlap_core_m)
     wing_origin_body: np.ndarray  # (3,) wing root quarter chord relative to the CG, body axes, m
     n_panels: int
 
@@ -51,7 +52,7 @@ def wake_arrays(model, wing_origin_body) -> WakeArrays:
                       t.panel_vehicle, t.control_b, t.normal_b, model.aic_static, model.eval_b, model.grad_w,
                       t.vehicle_panel_start, float(t.cutoff_m), int(model._core_mode),
                       int(model._core_mode if model.viscous_aic else CORE_NONE), float(model.kinematic_viscosity),
-                      np.ascontiguousarray(wing_origin_body, dtype=float), int(model.n_panels))
+                      float(model.overlap_core_m), np.ascontiguousarray(wing_origin_body, dtype=float), int(model.n_panels))
 
 
 @nb.njit(cache=True, error_model="numpy")
@@ -63,4 +64,5 @@ def evaluate_formation(w, pos, euler, airspeed, alpha, beta, gamma_out, vpts_out
                  w.surface_origin_b, w.surface_vehicle, w.surface_knot_start, w.surface_panel_start,
                  w.surface_core_scale, w.panel_left_knot, w.panel_vehicle, w.control_b, w.normal_b, w.aic_static,
                  w.eval_b, w.grad_w, w.vehicle_panel_start, w.cutoff_m, w.core_mode, w.aic_core_mode,
-                 w.kinematic_viscosity, gamma_out, vpts_out, wind_ned_out, wind_b_out, omega_b_out, omega_ned_out)
+                 w.kinematic_viscosity, gamma_out, vpts_out, wind_ned_out, wind_b_out, omega_b_out, omega_ned_out,
+                 w.overlap_core_m)

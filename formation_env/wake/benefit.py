@@ -61,12 +61,12 @@ def induced_drag_one(wake, gamma, pos, euler, speed, alpha, beta, out_drag, air_
         # Own horseshoes: the solve's law (plain, cutoff); the others': the field law (viscous core).
         ox, oy, oz = field_velocity(mx, my, mz, v, True, x1, x3, bound_dir, chord_dir, trail, origin, speed, gamma,
                                     wake.surface_knot_start, wake.surface_panel_start, wake.surface_vehicle,
-                                    wake.surface_core_scale, wake.cutoff_m, CORE_NONE, wake.kinematic_viscosity,
+                                    wake.surface_core_scale, wake.cutoff_m, CORE_NONE, wake.kinematic_viscosity, 0.0,
                                     r1, inv1, r3, inv3)
         ex, ey, ez = field_velocity(mx, my, mz, v, False, x1, x3, bound_dir, chord_dir, trail, origin, speed, gamma,
                                     wake.surface_knot_start, wake.surface_panel_start, wake.surface_vehicle,
                                     wake.surface_core_scale, wake.cutoff_m, wake.core_mode, wake.kinematic_viscosity,
-                                    r1, inv1, r3, inv3)
+                                    wake.overlap_core_m, r1, inv1, r3, inv3)
         vx = -vel[v, 0] + ox + ex
         vy = -vel[v, 1] + oy + ey
         vz = -vel[v, 2] + oz + ez
@@ -110,7 +110,7 @@ def isolated_induced_drag_one(wake_alone, v, pos, euler, speed, alpha, beta, air
         w.surface_vehicle, w.surface_knot_start)
     assemble_and_solve(x1, x3, bound_dir, chord_dir, trail, vel, rot, pos1, origin, sp1, w.knot_vehicle,
                        w.knot_surface, w.surface_core_scale, w.panel_left_knot, w.panel_vehicle, w.control_b, w.normal_b,
-                       w.aic_static, w.cutoff_m, w.aic_core_mode, w.kinematic_viscosity, np.empty((n, n)), gamma, r1,
+                       w.aic_static, w.cutoff_m, w.aic_core_mode, w.kinematic_viscosity, w.overlap_core_m, np.empty((n, n)), gamma, r1,
                        inv1, r3, inv3)
     d = np.empty(1)
     induced_drag_one(w, gamma, pos1, eul1, sp1, al1, be1, d, air_density)

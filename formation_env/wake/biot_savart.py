@@ -1,7 +1,9 @@
 """Compiled Biot-Savart laws of the ELL (thesis sections 4.2.2 and 4.3.6): a straight vortex branch
 (Eq. 4.35, h clipped at the cutoff of Eq. 4.31 as in Eq. 4.39), a semi-infinite trailing leg (Eqs. 4.56
 and 4.62; plain, or with the viscous core factor 1 - exp(-1.26 (h / rc)^2) of Eq. 4.1), the core
-radius rc = C sqrt(nu tau), and the shared point-to-knot vectors. Unit strength; metres, m/s."""
+radius rc = C sqrt(nu tau), and the shared point-to-knot vectors; and the overlap core of the other
+vehicles' branches (:func:`branch_cored`, :func:`leg_cored`; not in the thesis, docs/ell.md). Unit
+strength; metres, m/s."""
 
 from __future__ import annotations
 
@@ -10,8 +12,9 @@ import math
 import numba as nb
 import numpy as np
 
-__all__ = ["branch", "leg", "core_radius", "point_to_knots", "segment_velocity", "leg_velocity", "FOUR_PI",
-           "CORE_NONE", "CORE_LAMB_OSEEN", "CORE_KURYLOWICH", "LAMB_OSEEN_C", "KURYLOWICH_C"]
+__all__ = ["branch", "branch_cored", "leg", "leg_cored", "core_radius", "point_to_knots", "segment_velocity", "leg_velocity",
+           "FOUR_PI", "CORE_NONE", "CORE_LAMB_OSEEN", "CORE_KURYLOWICH", "LAMB_OSEEN_C", "KURYLOWICH_C",
+           "OVERLAP_CORE_CHORD_FRACTION", "CORE_PEAK"]
 
 FOUR_PI = 4.0 * math.pi
 CORE_NONE, CORE_LAMB_OSEEN, CORE_KURYLOWICH = 0, 1, 2
@@ -19,6 +22,18 @@ CORE_NONE, CORE_LAMB_OSEEN, CORE_KURYLOWICH = 0, 1, 2
 # (chapters 3 and 7); the viscous factor is 1 - exp(-1.26 (h / rc)^2).
 LAMB_OSEEN_C = 2.24
 KURYLOWICH_C = 36.2
+# The overlap core (:func:`branch_cored`, :func:`leg_cored`): another vehicle's lifting surface is
+# seen through a core of radius r_o = OVERLAP_CORE_CHORD_FRACTION x the largest mean chord b / AR of
+# the make-up (``WakeModel.overlap_core_m``; 0.193 m for the Aerosonde) about its bound and chordwise
+# segments and the starts of its trailing legs, and its trailing legs keep a viscous core of at
+# least the Eq. 4.31 cutoff eps. Overlapping or coincident vehicles then stay physical (the joint
+# solve stays well conditioned; |v| <= CORE_PEAK / (2 pi min(r_o, eps)) per unit strength and
+# branch) while farther than ~3 r_o from the other's wing the law is the thesis's.
+# A vehicle's own branches on its own points keep the thesis's plain law with the Eq. 4.31 cutoff.
+OVERLAP_CORE_CHORD_FRACTION = 1.0
+# max over x of (1 - exp(-1.26 x^2)) / x (at x ~ 1.0): the peak of the cored law is
+# CORE_PEAK / (2 pi rc) per unit strength for a semi-infinite or a finite straight branch.
+CORE_PEAK = 0.71635
 _TINY_H = 1e-12  # below this distance a point lies on the branch line: no contribution
 _MIN_CORE_M = 1e-9
 
@@ -56,6 +71,55 @@ def branch(dx, dy, dz, ax, ay, az, inv_a, bx, by, bz, inv_b, cutoff):
     denom = h2 if h2 >= cutoff * cutoff else math.sqrt(h2) * cutoff
     f = (cos_g - cos_d) / (FOUR_PI * denom)
     return f * cx, f * cy, f * cz
+
+
+@_jit
+def _overlap_factor(rho2, overlap_core):
+    """1 - exp(-1.26 (rho / r_o)^2): the overlap core's factor at squared distance rho2."""
+    x = 1.26 * rho2 / (overlap_core * overlap_core)
+    return 1.0 if x > 40.0 else -math.expm1(-x)
+
+
+@_jit
+def branch_cored(dx, dy, dz, ax, ay, az, inv_a, bx, by, bz, inv_b, cutoff, overlap_core):
+    """:func:`branch` as another vehicle's bound or chordwise branch: the Biot-Savart law (no cutoff)
+    times the overlap core 1 - exp(-1.26 (rho / r_o)^2), rho the distance from P to the *segment*
+    (its closest point: h beside it, the distance to the nearer end beyond its ends). So the law
+    is the plain one (to exp(-1.26 (rho/r_o)^2)) farther than ~3 r_o from the segment itself, even
+    on its line's extension, and |v| <= CORE_PEAK / (2 pi r_o) per unit strength anywhere.
+    ``overlap_core`` <= 0: :func:`branch` (the thesis's law with the cutoff)."""
+    if overlap_core <= 0.0:
+        return branch(dx, dy, dz, ax, ay, az, inv_a, bx, by, bz, inv_b, cutoff)
+    cx = dy * az - dz * ay
+    cy = dz * ax - dx * az
+    cz = dx * ay - dy * ax
+    h2 = cx * cx + cy * cy + cz * cz
+    if h2 < _TINY_H * _TINY_H:
+        return 0.0, 0.0, 0.0
+    sa = dx * ax + dy * ay + dz * az  # d . (P - A): > 0 downstream of A
+    sb = dx * bx + dy * by + dz * bz  # d . (P - B): < 0 upstream of B
+    if sa <= 0.0:
+        rho2 = ax * ax + ay * ay + az * az
+    elif sb >= 0.0:
+        rho2 = bx * bx + by * by + bz * bz
+    else:
+        rho2 = h2
+    f = (sa * inv_a - sb * inv_b) * _overlap_factor(rho2, overlap_core) / (FOUR_PI * h2)
+    return f * cx, f * cy, f * cz
+
+
+@_jit
+def leg_cored(tx, ty, tz, ax, ay, az, inv_a, cutoff, core_radius, overlap_core):
+    """:func:`leg` as another vehicle's trailing leg: the viscous core of radius max(``core_radius``,
+    ``cutoff``) (so never thinner than the Eq. 4.31 cutoff eps: |v| <= CORE_PEAK / (2 pi eps) per
+    unit strength), times the overlap core 1 - exp(-1.26 (|P - A| / r_o)^2) about the leg's start A
+    (the source's 3/4-chord knot), which is 1 farther than ~3 r_o from the source's lifting surface.
+    ``overlap_core`` <= 0: :func:`leg` (the law without the overlap core)."""
+    if overlap_core <= 0.0:
+        return leg(tx, ty, tz, ax, ay, az, inv_a, cutoff, core_radius)
+    vx, vy, vz = leg(tx, ty, tz, ax, ay, az, inv_a, cutoff, max(core_radius, cutoff))
+    f = _overlap_factor(ax * ax + ay * ay + az * az, overlap_core)
+    return f * vx, f * vy, f * vz
 
 
 @_jit

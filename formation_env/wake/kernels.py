@@ -26,15 +26,16 @@ import numba as nb
 import numpy as np
 
 from .aic import assemble_and_solve, lu_solve_inplace, static_aic
-from .biot_savart import (_MIN_CORE_M, _TINY_H, CORE_KURYLOWICH, CORE_LAMB_OSEEN, CORE_NONE, FOUR_PI,  # noqa: F401
-                          KURYLOWICH_C, LAMB_OSEEN_C, branch, core_radius, leg, leg_velocity, point_to_knots,
-                          segment_velocity)
+from .biot_savart import (_MIN_CORE_M, _TINY_H, CORE_KURYLOWICH, CORE_LAMB_OSEEN, CORE_NONE, CORE_PEAK,  # noqa: F401
+                          FOUR_PI, KURYLOWICH_C, LAMB_OSEEN_C, OVERLAP_CORE_CHORD_FRACTION, branch, branch_cored,
+                          core_radius, leg, leg_velocity, point_to_knots, segment_velocity)
 from .field import field_velocity, field_velocity_batch
 from .posing import branch_directions, dcm_ned_to_body_1, place_lattice, posed_lattice, to_ned
 
 __all__ = ["evaluate_one", "effective_wind", "evaluate_batch_serial", "evaluate_batch_parallel", "field_velocity_batch",
            "field_velocity", "assemble_and_solve", "static_aic", "lu_solve_inplace", "posed_lattice", "place_lattice",
-           "dcm_ned_to_body_1", "to_ned", "branch_directions", "point_to_knots", "branch", "leg", "core_radius",
+           "dcm_ned_to_body_1", "to_ned", "branch_directions", "point_to_knots", "branch", "branch_cored", "leg",
+           "core_radius", "CORE_PEAK", "OVERLAP_CORE_CHORD_FRACTION", "default_overlap_core",
            "segment_velocity", "leg_velocity", "FOUR_PI", "CORE_NONE", "CORE_LAMB_OSEEN", "CORE_KURYLOWICH",
            "LAMB_OSEEN_C", "KURYLOWICH_C"]
 
@@ -48,10 +49,16 @@ def evaluate_one(
     surface_origin_b, surface_vehicle, surface_knot_start, surface_panel_start, surface_core_scale,
     panel_left_knot, panel_vehicle, control_b, normal_b, aic_static, eval_b, grad_w, vehicle_panel_start,
     cutoff, core_mode, aic_core_mode, nu,
-    gamma_out, vpts_out, wind_ned_out, wind_b_out, omega_b_out, omega_ned_out,
+    gamma_out, vpts_out, wind_ned_out, wind_b_out, omega_b_out, omega_ned_out, overlap_core=-1.0,
 ):
     """One formation: pose, joint solve, induced velocity at the evaluation points (other
-    vehicles only) and the effective translational and rotational wind per vehicle."""
+    vehicles only) and the effective translational and rotational wind per vehicle.
+    ``overlap_core`` (m, 0 = off): the minimum core of the other vehicles' branches in the solve
+    and the field (see :func:`formation_env.wake.field.field_velocity`); negative (the default):
+    the default overlap core of this lattice, :func:`default_overlap_core` (what ``WakeModel``
+    uses unless told otherwise)."""
+    if overlap_core < 0.0:
+        overlap_core = default_overlap_core(knot_x1_b, knot_x3_b, surface_knot_start)
     n_panels = panel_left_knot.shape[0]
     rot, vel, trail, x1, x3, origin, bound_dir, chord_dir, r1, inv1, r3, inv3 = posed_lattice(
         pos, euler, airspeed, alpha, beta, knot_x1_b, knot_x3_b, knot_vehicle, knot_surface,
@@ -59,18 +66,45 @@ def evaluate_one(
     aic = np.empty((n_panels, n_panels))
     assemble_and_solve(x1, x3, bound_dir, chord_dir, trail, vel, rot, pos, origin, airspeed, knot_vehicle, knot_surface,
                        surface_core_scale, panel_left_knot, panel_vehicle, control_b, normal_b, aic_static, cutoff,
-                       aic_core_mode, nu, aic, gamma_out, r1, inv1, r3, inv3)
+                       aic_core_mode, nu, overlap_core, aic, gamma_out, r1, inv1, r3, inv3)
     pt = np.empty(3)
     for j in range(n_panels):
         v = panel_vehicle[j]
         to_ned(rot[v], pos[v], eval_b[j], pt)
         wx, wy, wz = field_velocity(pt[0], pt[1], pt[2], v, False, x1, x3, bound_dir, chord_dir, trail, origin,
                                     airspeed, gamma_out, surface_knot_start, surface_panel_start,
-                                    surface_vehicle, surface_core_scale, cutoff, core_mode, nu, r1, inv1, r3, inv3)
+                                    surface_vehicle, surface_core_scale, cutoff, core_mode, nu, overlap_core,
+                                    r1, inv1, r3, inv3)
         vpts_out[j, 0] = wx
         vpts_out[j, 1] = wy
         vpts_out[j, 2] = wz
     effective_wind(rot, vpts_out, grad_w, vehicle_panel_start, wind_ned_out, wind_b_out, omega_b_out, omega_ned_out)
+
+
+@_jit
+def default_overlap_core(knot_x1_b, knot_x3_b, surface_knot_start):
+    """The default overlap core r_o = OVERLAP_CORE_CHORD_FRACTION x the largest mean chord of any
+    surface of the lattice, m. A surface's mean chord is the length-weighted mean of its panels'
+    chords (2 |X3 - X1| at the knots, trapezoidal): S / b = b / AR for the linear planforms of
+    :mod:`formation_env.geometry` (0.1933 m for the Aerosonde's wing, so r_o = 0.1933 m)."""
+    best = 0.0
+    for s in range(surface_knot_start.shape[0] - 1):
+        num = 0.0
+        den = 0.0
+        for k in range(surface_knot_start[s], surface_knot_start[s + 1] - 1):
+            c0 = 0.0
+            c1 = 0.0
+            ln = 0.0
+            for i in range(3):
+                c0 += (knot_x3_b[k, i] - knot_x1_b[k, i]) ** 2
+                c1 += (knot_x3_b[k + 1, i] - knot_x1_b[k + 1, i]) ** 2
+                ln += (knot_x1_b[k + 1, i] - knot_x1_b[k, i]) ** 2
+            ln = np.sqrt(ln)
+            num += (np.sqrt(c0) + np.sqrt(c1)) * ln  # mean of the two chords 2|X3 - X1|, times the length
+            den += ln
+        if den > 0.0:
+            best = max(best, num / den)
+    return OVERLAP_CORE_CHORD_FRACTION * best
 
 
 @_jit
@@ -120,7 +154,7 @@ def _make_batch(parallel: bool):
         surface_origin_b, surface_vehicle, surface_knot_start, surface_panel_start, surface_core_scale,
         panel_left_knot, panel_vehicle, control_b, normal_b, aic_static, eval_b, grad_w, vehicle_panel_start,
         cutoff, core_mode, aic_core_mode, nu,
-        gamma_out, vpts_out, wind_ned_out, wind_b_out, omega_b_out, omega_ned_out,
+        gamma_out, vpts_out, wind_ned_out, wind_b_out, omega_b_out, omega_ned_out, overlap_core,
     ):
         for b in nb.prange(pos.shape[0]):
             evaluate_one(
@@ -130,6 +164,7 @@ def _make_batch(parallel: bool):
                 panel_left_knot, panel_vehicle, control_b, normal_b, aic_static, eval_b, grad_w, vehicle_panel_start,
                 cutoff, core_mode, aic_core_mode, nu,
                 gamma_out[b], vpts_out[b], wind_ned_out[b], wind_b_out[b], omega_b_out[b], omega_ned_out[b],
+                overlap_core,
             )
 
     return evaluate_batch

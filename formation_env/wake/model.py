@@ -78,6 +78,16 @@ class WakeModel:
         leader's trailing legs instead of spiking when a leg passes a control point. False: the
         thesis's AIC exactly (every branch plain, Eq. 4.31 cutoff). Tables 5.2-5.4 are the same
         to 1e-9 either way.
+    overlap_core:
+        Radius r_o of the overlap core of the *other* vehicles' branches (bound, chordwise and the
+        starts of the trailing legs; the legs also keep a viscous core >= the Eq. 4.31 cutoff), as a
+        fraction of the largest mean chord b / AR of the make-up (default 1.0: 0.193 m for the
+        Aerosonde); ``overlap_core_m`` is the radius (see docs/ell.md). Keeps overlapping or
+        coincident vehicles physical (a well-conditioned joint solve; |v| <= CORE_PEAK / (2 pi
+        min(r_o, eps)) per unit strength and branch); farther than ~3 r_o from another vehicle's
+        lifting surface it changes nothing. 0 turns it off (the previous law, singular when vehicles
+        overlap). A vehicle's own branches on its own points always keep the thesis's law (plain,
+        Eq. 4.31 cutoff).
     """
 
     def __init__(
@@ -90,6 +100,7 @@ class WakeModel:
         kinematic_viscosity: float = AIR_KINEMATIC_VISCOSITY_SL,
         span_tol: float = 0.1,
         viscous_aic: bool = True,
+        overlap_core: float = kernels.OVERLAP_CORE_CHORD_FRACTION,
     ) -> None:
         vehicles = tuple(vehicles)
         if not vehicles:
@@ -107,7 +118,10 @@ class WakeModel:
             raise ValueError(f"WakeModel: kinematic_viscosity must be finite and > 0, got {kinematic_viscosity!r}")
         if not (np.isfinite(span_tol) and 0 < span_tol < 1):
             raise ValueError(f"WakeModel: span_tol must be in (0, 1), got {span_tol!r}")
+        if not (np.isfinite(overlap_core) and overlap_core >= 0):
+            raise ValueError(f"WakeModel: overlap_core must be finite and >= 0, got {overlap_core!r}")
         self.vehicles = vehicles
+        self.overlap_core = float(overlap_core)
         self.core = core
         self.eval_points = eval_points
         self.rotational = rotational
@@ -115,6 +129,11 @@ class WakeModel:
         self.viscous_aic = bool(viscous_aic)
         self.template = build_template(vehicles)
         t = self.template
+        # r_o = fraction x the largest mean chord (S / b = b / AR) of any surface, m; the default fraction
+        # gives exactly kernels.default_overlap_core (what evaluate_one uses when not told)
+        r_default = float(kernels.default_overlap_core(t.knot_x1_b, t.knot_x3_b, t.surface_knot_start))
+        self.overlap_core_m = (r_default if self.overlap_core == kernels.OVERLAP_CORE_CHORD_FRACTION
+                               else r_default * self.overlap_core / kernels.OVERLAP_CORE_CHORD_FRACTION)
         self.eval_b = t.control_b if eval_points == "control" else t.quarter_chord_b
         self.grad_w = gradient_weights(t, self.eval_b, rotational, span_tol)
         self.aic_static = kernels.static_aic(t.knot_x1_b, t.knot_x3_b, t.knot_vehicle, t.knot_surface, t.surface_knot_start,
@@ -155,7 +174,7 @@ class WakeModel:
             t.panel_left_knot, t.panel_vehicle, t.control_b, t.normal_b, self.aic_static, self.eval_b, self.grad_w,
             t.vehicle_panel_start, t.cutoff_m, self._core_mode,
             self._core_mode if self.viscous_aic else kernels.CORE_NONE, self.kinematic_viscosity,
-            gamma, vpts, *out,
+            gamma, vpts, *out, self.overlap_core_m,
         )
         return WakeSolution(gamma, vpts, *out)
 
@@ -168,13 +187,16 @@ class WakeModel:
         *,
         only_vehicle: int | np.ndarray | None = None,
         core: str | None = None,
+        overlap: bool | None = None,
     ) -> np.ndarray:
         """Induced velocity (m/s, NED) at arbitrary field points.
 
         points_ned: (B, P, 3) or (P, 3) (shared by all formations). exclude_vehicle: a vehicle
         index (or one per point) whose own horseshoes are left out; None includes all.
         only_vehicle: instead, keep only that vehicle's horseshoes. core: override the model's
-        viscous core for this call (e.g. ``"none"`` for the AIC-consistent law).
+        viscous core for this call (e.g. ``"none"`` for the AIC-consistent law). The overlap core
+        (``overlap_core_m``) applies to every branch unless ``only_vehicle`` is given (one vehicle's
+        own field: the solve's law), or when ``overlap=False``.
         """
         state = self._check_state(state)
         pts = np.asarray(points_ned, dtype=float)
@@ -199,7 +221,8 @@ class WakeModel:
             np.ascontiguousarray(pts), np.ascontiguousarray(vf), only_vehicle is not None,
             state.position_ned, state.euler_rad, state.airspeed_mps, state.alpha_rad, state.beta_rad,
             np.ascontiguousarray(solution.circulation), *self._geometry_args,
-            self.template.cutoff_m, core_mode, self.kinematic_viscosity, out,
+            self.template.cutoff_m, core_mode, self.kinematic_viscosity,
+            self.overlap_core_m if (only_vehicle is None if overlap is None else overlap) else 0.0, out,
         )
         return out
 

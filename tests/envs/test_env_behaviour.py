@@ -91,7 +91,7 @@ def test_bad_input_raises_clear_errors():
         formation_env.parallel_env("barrel_roll")
     with pytest.raises(ValueError, match="action_mode"):
         formation_env.parallel_env("formation_keeping", action_mode="joystick")
-    with pytest.raises(ValueError, match="wingspan"):
+    with pytest.raises(TypeError, match="wingspan"):  # unknown option: TypeError, as for any unexpected keyword
         formation_env.parallel_env("formation_keeping", wingspan=3)
     with pytest.raises(ValueError, match="control_hz"):
         formation_env.parallel_env("formation_keeping", control_hz=7.0)
@@ -129,7 +129,7 @@ def test_collision_terminates_every_agent_with_the_penalty():
     obs, rew, term, trunc, info = env.step({a: np.zeros(4, np.float32) for a in env.agents})
     assert all(term.values()) and not any(trunc.values()) and env.agents == []
     for a in ("uav_0", "uav_1"):
-        assert info[a]["collision"] and info[a]["reward_terms"]["collision"] <= -50.0
+        assert info[a]["collision"] and info[a]["reward_collision"] <= -50.0
         assert info[a]["min_separation_m"] < 1.45
         assert np.all(np.isfinite(obs[a]))
 

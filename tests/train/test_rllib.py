@@ -21,7 +21,7 @@ import yaml
 from formation_env.cli import main
 from formation_env.errors import MissingDependencyError
 
-pytest.importorskip("ray.rllib", reason="the 'distributed' extra (ray[rllib]) is part of the test install")
+pytest.importorskip("ray.rllib", reason="needs the 'distributed' extra (ray[rllib]); `make test` installs it")
 
 REPO = Path(__file__).resolve().parents[2]
 CLI = [sys.executable, "-m", "formation_env.cli"]
