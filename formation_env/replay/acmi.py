@@ -9,7 +9,7 @@ File layout written::
     0,ReferenceLatitude=<lat0>
     0,Title=...,DataSource=formation-env,Comments=...
     #0.00
-    101,T=dlon|dlat|alt|roll|pitch|yaw,Name=Aerosonde,Type=Air+FixedWing,CallSign=UAV1,Color=...,<custom>
+    101,T=dlon|dlat|alt|roll|pitch|yaw,Name=Aerosonde,Type=Air+FixedWing,CallSign=uav_0,Color=...,<custom>
     ...
 
 Positions: the flat-earth NED metres of the simulator are placed on the WGS-84 ellipsoid around
@@ -112,7 +112,7 @@ def acmi_text(log: EpisodeLog, *, reference: dict | None = None, title: str | No
             t = f"{dlon[k, i]:.{p}f}|{dlat[k, i]:.{p}f}|{alt[k, i]:.3f}|{att[k, i, 0]:.3f}|{att[k, i, 1]:.3f}|{att[k, i, 2]:.3f}"
             wi, om = log.induced_wind_ned[k, i], log.induced_omega_body[k, i]
             custom = ",".join(f"{name}={val:.6g}" for name, val in zip(_CUSTOM, (*wi, *om)))
-            head = (f",Name=Aerosonde,Type=Air+FixedWing,CallSign=UAV{i + 1},Pilot=uav_{i},"
+            head = (f",Name=Aerosonde,Type=Air+FixedWing,CallSign=uav_{i},Pilot=uav_{i},"
                     f"Color={_COLOURS[i % len(_COLOURS)]},Group=formation" if n == 0 else "")
             lines.append(f"{object_id(i)},T={t}{head},GroundSpeed={gs[k, i]:.3f},{custom}")
     return "\n".join(lines) + "\n"

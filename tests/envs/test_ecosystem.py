@@ -12,6 +12,7 @@ import pytest
 
 import formation_env
 from formation_env.envs.core import INFO_REWARD_KEYS
+from formation_env.envs.observations import observation_size
 
 ID = "formation_env/FormationKeeping-v0"
 
@@ -108,3 +109,25 @@ def test_cleanrl_style_loop_over_formation_vector_env():
             lengths += [int(n) for n, done in zip(infos["episode"]["l"], infos["_episode"]) if done]
     assert lengths == [10, 10]  # same-step autoreset: both formations finished once, at decision 10
     envs.close()
+
+
+def test_supersuit_wrappers_and_sb3_vec_env():
+    """SuperSuit's PettingZoo wrappers (clip, frame stack) and its SB3 vector-env route."""
+    ss = pytest.importorskip("supersuit")
+    env = ss.frame_stack_v1(ss.clip_actions_v0(formation_env.parallel_env("formation_keeping", learning="all",
+                                                                        action_mode="setpoints")), 3)
+    obs, _ = env.reset(seed=0)
+    d = observation_size(2)
+    assert {a: o.shape for a, o in obs.items()} == {"uav_0": (3 * d,), "uav_1": (3 * d,)}
+    for _ in range(3):
+        obs, rew, term, trunc, infos = env.step({a: 2.0 * np.ones(4, np.float32) for a in env.agents})  # clipped
+        assert all(np.isfinite(r) for r in rew.values()) and all(np.all(np.isfinite(o)) for o in obs.values())
+    venv = ss.concat_vec_envs_v1(ss.pettingzoo_env_to_vec_env_v1(
+        formation_env.parallel_env("formation_keeping", learning="followers", action_mode="setpoints")), 2,
+        num_cpus=0, base_class="stable_baselines3")
+    first = venv.reset()
+    assert first.shape == (2, d)
+    nxt, rew, done, infos = venv.step(np.zeros((2, 4), np.float32))
+    assert nxt.shape == (2, d) and rew.shape == (2,) and np.all(np.isfinite(rew)) and not np.any(done)
+    assert not np.array_equal(first, nxt)
+    venv.close()
