@@ -7,6 +7,8 @@ the agents' rows, validates nothing twice and builds the info dicts. No physics 
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from .config import EnvConfig
@@ -120,13 +122,16 @@ class FormationCore:
         err_vec = eng.state[i, :, 10:13] - eng.position_demand[i]
         gust = eng.turbulence_gust_ned(i)
         terms = None if self._fresh[i] else eng.reward_terms(i)
+        separation = _separation(eng.state[i], out.separation_m[i])
+        # a formation whose state is finite has finite infos (they derive from it): check once
+        clean = bool(np.isfinite(eng.state[i]).all())
         result = []
         for v in range(eng.n_vehicles):
             info = {
                 "time_s": float(eng.time_s[i]),
                 "slot_error_m": float(out.slot_error_m[i, v]) if self.last_terms is not None else float(np.linalg.norm(err_vec[v])),
                 "slot_error_ned_m": err_vec[v].copy(),
-                "min_separation_m": float(_separation(eng.state[i], out.separation_m[i])[v]),
+                "min_separation_m": float(separation[v]),
                 "induced_wind_ned_mps": eng.induced[i, v].copy(),
                 "induced_omega_body_rad_s": eng.omega[i, v].copy(),
                 "fuel_kg": float(eng.state[i, v, 13]),
@@ -140,7 +145,8 @@ class FormationCore:
                 info["induced_drag_saving"] = float(out.saving[i, v])
             for key, name in zip(INFO_REWARD_KEYS, _REWARD_TERM_NAMES):
                 info[key] = 0.0 if terms is None else float(terms[name][v])
-            _finite_values(info)
+            if not clean:
+                _finite_values(info)
             result.append(info)
         return result
 
@@ -168,7 +174,7 @@ def _finite_values(info: dict) -> None:
     ``min_separation_m``, which stays inf for a lone UAV (no neighbour)."""
     for key, value in info.items():
         if isinstance(value, float):
-            if not np.isfinite(value) and not (key == "min_separation_m" and value == np.inf):
+            if not math.isfinite(value) and not (key == "min_separation_m" and value == math.inf):
                 info[key] = 0.0
         elif isinstance(value, np.ndarray) and value.dtype.kind == "f" and not np.all(np.isfinite(value)):
             info[key] = np.where(np.isfinite(value), value, 0.0)

@@ -414,8 +414,11 @@ class _ThreadTuner:
         self.stats: dict = {}
 
     def run(self, kernel, n: int, args: tuple) -> None:
+        if n < PARALLEL_MIN_BATCH:
+            kernel(*args, 0, n)
+            return
         threads = min(_threads(), n)
-        if threads <= 1 or n < PARALLEL_MIN_BATCH:
+        if threads <= 1:
             kernel(*args, 0, n)
             return
         st = self.stats.setdefault((kernel, n, threads), [math.inf, math.inf, 0])
