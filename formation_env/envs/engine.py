@@ -18,8 +18,9 @@ from ..aircraft.state import POS
 from ..atmosphere.frozen_field import frozen_field_reset
 from ..control import PIDFlightControl
 from ..control.law import fcs_params
+from ..control.observation import track_frame_offset_to_ned
 from ..geometry import aerosonde
-from ..scenarios import Scenario, get_scenario
+from ..scenarios import AEROSONDE_SPAN_M, Scenario, get_scenario
 from ..sim import WakeConfig
 from ..sim.observe import REWARD_TERMS
 from ..sim.params import (ACTION_MODE_CODES, RESIDUAL_SCALE, SETPOINT_POSITION_SCALE_M, SETPOINT_SPEED_SCALE_MPS,
@@ -28,25 +29,19 @@ from ..sim.params import (ACTION_MODE_CODES, RESIDUAL_SCALE, SETPOINT_POSITION_S
 from ..sim.state import init_output, init_state
 from ..sim.step import observe, refresh, step
 from ..wake import WakeModel
-from ..wake.loads import _alone_model
+from ..wake.loads import isolated_model
 from .config import EnvConfig
 from .observations import observation_size
 
 __all__ = ["FormationEpisode", "surface_scale", "RESIDUAL_SCALE", "SETPOINT_POSITION_SCALE_M",
            "SETPOINT_SPEED_SCALE_MPS", "AEROSONDE_SPAN_M"]
 
-AEROSONDE_SPAN_M = 2.9
 
 
 def surface_scale(limit_rad: float) -> np.ndarray:
     """Surfaces-mode scale per unit action: the FCS surface limit (rad) for the three surfaces,
     0.5 for the throttle."""
     return np.array([limit_rad, limit_rad, limit_rad, 0.5])
-
-
-def _track_to_ned(offset, chi):
-    c, s = np.cos(chi), np.sin(chi)
-    return np.stack([c * offset[..., 0] - s * offset[..., 1], s * offset[..., 0] + c * offset[..., 1], offset[..., 2]], -1)
 
 
 class FormationEpisode:
@@ -90,7 +85,7 @@ class FormationEpisode:
             0 if sigma <= 0 else (1 if config.turbulence_field == "frozen" else 2),
             bool((config.compute_benefit or w.benefit > 0) and self.wake_model is not None),
             aircraft_arrays(), wake_arrays(lattice, self.wing_origin_body),
-            wake_arrays(_alone_model(vehicle, wc.core, wc.eval_points, wc.rotational, lattice.kinematic_viscosity,
+            wake_arrays(isolated_model(vehicle, wc.core, wc.eval_points, wc.rotational, lattice.kinematic_viscosity,
                                      wc.viscous_aic), self.wing_origin_body), scenario_arrays(sc, rnd.any_manoeuvre),
             fcs_params(fc, sc.dt),
             ActionParams(ACTION_MODE_CODES[config.action_mode], self.mask.copy(),
@@ -123,7 +118,7 @@ class FormationEpisode:
             if v > 1 and rnd.slot_offset_b > 0:
                 jitter[1:] = rng.normal(0.0, rnd.slot_offset_b * 2.9, (v - 1, 3))
             s.slot_jitter[i] = jitter
-            state[1:, POS] += _track_to_ned(jitter[1:], 0.0)
+            state[1:, POS] += track_frame_offset_to_ned(jitter[1:], 0.0)
             if v > 1 and rnd.initial_offset_m > 0:
                 state[1:, POS] += rng.normal(0.0, rnd.initial_offset_m, (v - 1, 3))
             s.aircraft[i] = state

@@ -14,6 +14,7 @@ import math
 
 import numba as nb
 
+from .observe import signed_log
 from .params import ACCEL_MPS2, CLIMB_RATE_MPS, TURN_RATE_RAD_S
 
 __all__ = ["reference_path", "slot_offset_and_rate", "formation_demands", "gust_wind_ned", "schedule_features"]
@@ -115,13 +116,6 @@ def gust_wind_ned(sc, t, out):
 
 
 @_jit
-def _slog(x, scale):
-    if x >= 0.0:
-        return math.log1p(x / scale)
-    return -math.log1p(-x / scale)
-
-
-@_jit
 def schedule_features(sc, t, jitter, out):
     """(V, 10) each follower's slot schedule as observed: offset now (spans, track frame), its rate
     (slog 1 m/s), next keyframe's offset minus the current one (spans), time to the next keyframe
@@ -143,7 +137,7 @@ def schedule_features(sc, t, jitter, out):
         for i in range(3):
             cur = off[i] + jitter[j, i]
             out[j, i] = cur / span
-            out[j, 3 + i] = _slog(rate[i], 1.0)
+            out[j, 3 + i] = signed_log(rate[i], 1.0)
             if nxt < n:
                 out[j, 6 + i] = (sc.slot_offsets_m[j, nxt, i] + jitter[j, i] - cur) / span
             else:

@@ -89,6 +89,17 @@ def ell_inputs(state, ambient, wing_origin_b, pos, euler, speed, alpha, beta):
 
 
 @_jit
+def _clear_wake(held_wind, held_omega, gamma):
+    """No induced wind and no circulation (a formation outside the envelope, or a degenerate solve)."""
+    for a in range(held_wind.shape[0]):
+        for i in range(3):
+            held_wind[a, i] = 0.0
+            held_omega[a, i] = 0.0
+    for j in range(gamma.shape[0]):
+        gamma[j] = 0.0
+
+
+@_jit
 def step_one(state, controls, ambient, turb, held_wind, held_omega, gamma, update_wake, wake_on, wake, aircraft, dt,
              out_state, out_status):
     """One formation (V aircraft) by one step dt: ELL effective wind when ``update_wake`` (held
@@ -132,19 +143,9 @@ def step_one(state, controls, ambient, turb, held_wind, held_omega, gamma, updat
                     if not (math.isfinite(held_wind[a, i]) and math.isfinite(held_omega[a, i])):
                         finite = False
             if not finite:
-                for a in range(nv):
-                    for i in range(3):
-                        held_wind[a, i] = 0.0
-                        held_omega[a, i] = 0.0
-                for j in range(gamma.shape[0]):
-                    gamma[j] = 0.0
+                _clear_wake(held_wind, held_omega, gamma)
         else:
-            for a in range(nv):
-                for i in range(3):
-                    held_wind[a, i] = 0.0
-                    held_omega[a, i] = 0.0
-            for j in range(gamma.shape[0]):
-                gamma[j] = 0.0
+            _clear_wake(held_wind, held_omega, gamma)
     for a in range(nv):
         for i in range(3):
             wind[a, 6 + i] = held_wind[a, i]

@@ -15,7 +15,7 @@ import numpy as np
 from ..aircraft.kernels import _air
 from ..frames import quaternion_dcm_terms
 
-__all__ = ["observe_formation", "reward_formation", "REWARD_TERMS", "OBS_CLIP", "OMEGA_REF", "min_separation_each"]
+__all__ = ["observe_formation", "reward_formation", "REWARD_TERMS", "OBS_CLIP", "OMEGA_REF", "min_separation_each", "signed_log"]
 
 _jit = nb.njit(cache=True, error_model="numpy")
 
@@ -42,7 +42,8 @@ def _clean(x):
 
 
 @_jit
-def _slog(x, scale):
+def signed_log(x, scale):
+    """sign(x) ln(1 + |x| / scale), one number (the observation's signed-log scaling)."""
     if x >= 0.0:
         return math.log1p(x / scale)
     return -math.log1p(-x / scale)
@@ -82,15 +83,15 @@ def observe_formation(x, induced, omega, amb, pd, vd, prev, schedule, cstate, tr
         o[4] = theta / 0.5
         o[5] = ((psi - chi[a] + math.pi) % (2.0 * math.pi) - math.pi) / 0.5
         o[6], o[7], o[8] = xa[3], xa[4], xa[5]
-        o[9] = _slog(-xa[12] - altitude, ALTITUDE_SCALE_M)
+        o[9] = signed_log(-xa[12] - altitude, ALTITUDE_SCALE_M)
         dx, dy, dz = xa[10] - pd[a, 0], xa[11] - pd[a, 1], xa[12] - pd[a, 2]
-        o[10] = _slog(c * dx + s * dy, POSITION_SCALE_M)
-        o[11] = _slog(-s * dx + c * dy, POSITION_SCALE_M)
-        o[12] = _slog(dz, POSITION_SCALE_M)
+        o[10] = signed_log(c * dx + s * dy, POSITION_SCALE_M)
+        o[11] = signed_log(-s * dx + c * dy, POSITION_SCALE_M)
+        o[12] = signed_log(dz, POSITION_SCALE_M)
         dx, dy, dz = vel[a, 0] - vd[a, 0], vel[a, 1] - vd[a, 1], vel[a, 2] - vd[a, 2]
-        o[13] = _slog(c * dx + s * dy, VELOCITY_SCALE_MPS)
-        o[14] = _slog(-s * dx + c * dy, VELOCITY_SCALE_MPS)
-        o[15] = _slog(dz, VELOCITY_SCALE_MPS)
+        o[13] = signed_log(c * dx + s * dy, VELOCITY_SCALE_MPS)
+        o[14] = signed_log(-s * dx + c * dy, VELOCITY_SCALE_MPS)
+        o[15] = signed_log(dz, VELOCITY_SCALE_MPS)
         r00, r01, r02, r10, r11, r12, r20, r21, r22 = quaternion_dcm_terms(e0, ex, ey, ez)
         w0, w1, w2 = induced[a, 0], induced[a, 1], induced[a, 2]
         o[16] = r00 * w0 + r10 * w1 + r20 * w2  # body = R^T ned
@@ -98,9 +99,9 @@ def observe_formation(x, induced, omega, amb, pd, vd, prev, schedule, cstate, tr
         o[18] = r02 * w0 + r12 * w1 + r22 * w2
         o[19], o[20], o[21] = omega[a, 0], omega[a, 1], omega[a, 2]
         dx, dy, dz = amb[a, 0], amb[a, 1], amb[a, 2]
-        o[22] = _slog(c * dx + s * dy, WIND_SCALE_MPS)
-        o[23] = _slog(-s * dx + c * dy, WIND_SCALE_MPS)
-        o[24] = _slog(dz, WIND_SCALE_MPS)
+        o[22] = signed_log(c * dx + s * dy, WIND_SCALE_MPS)
+        o[23] = signed_log(-s * dx + c * dy, WIND_SCALE_MPS)
+        o[24] = signed_log(dz, WIND_SCALE_MPS)
         o[25] = xa[14] / OMEGA_REF - 1.0
         o[26], o[27], o[28], o[29] = prev[a, 0], prev[a, 1], prev[a, 2], prev[a, 3]
         k = 30
@@ -108,19 +109,19 @@ def observe_formation(x, induced, omega, amb, pd, vd, prev, schedule, cstate, tr
             o[k + m] = schedule[a, m]
         k += SCHEDULE_SIZE
         for m in range(CONTROLLER_STATE_SIZE):
-            o[k + m] = _slog(cstate[a, m], CONTROLLER_STATE_SCALE)
+            o[k + m] = signed_log(cstate[a, m], CONTROLLER_STATE_SCALE)
         k += CONTROLLER_STATE_SIZE
         for j in range(nv):
             if j == a:
                 continue
             dx, dy, dz = x[j, 10] - xa[10], x[j, 11] - xa[11], x[j, 12] - xa[12]
-            o[k] = _slog(c * dx + s * dy, NEIGHBOUR_POSITION_SCALE_M)
-            o[k + 1] = _slog(-s * dx + c * dy, NEIGHBOUR_POSITION_SCALE_M)
-            o[k + 2] = _slog(dz, NEIGHBOUR_POSITION_SCALE_M)
+            o[k] = signed_log(c * dx + s * dy, NEIGHBOUR_POSITION_SCALE_M)
+            o[k + 1] = signed_log(-s * dx + c * dy, NEIGHBOUR_POSITION_SCALE_M)
+            o[k + 2] = signed_log(dz, NEIGHBOUR_POSITION_SCALE_M)
             dx, dy, dz = vel[j, 0] - vel[a, 0], vel[j, 1] - vel[a, 1], vel[j, 2] - vel[a, 2]
-            o[k + 3] = _slog(c * dx + s * dy, VELOCITY_SCALE_MPS)
-            o[k + 4] = _slog(-s * dx + c * dy, VELOCITY_SCALE_MPS)
-            o[k + 5] = _slog(dz, VELOCITY_SCALE_MPS)
+            o[k + 3] = signed_log(c * dx + s * dy, VELOCITY_SCALE_MPS)
+            o[k + 4] = signed_log(-s * dx + c * dy, VELOCITY_SCALE_MPS)
+            o[k + 5] = signed_log(dz, VELOCITY_SCALE_MPS)
             k += 6
         for k in range(o.shape[0]):
             o[k] = _clean(o[k])

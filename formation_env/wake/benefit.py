@@ -16,7 +16,7 @@ no Biot-Savart law is repeated here.
 The lattice comes as a ``WakeArrays`` NamedTuple (:func:`formation_env.wake.arrays.wake_arrays`, which
 re-exports :mod:`formation_env.wake.arrays`); ``wake_alone`` is that of ``WakeModel([vehicle])``
 with the formation model's options (``core``, ``eval_points``, ``rotational``,
-``kinematic_viscosity``, ``viscous_aic``), as ``loads._alone_model`` builds it. Poses are the
+``kinematic_viscosity``, ``viscous_aic``), as ``loads.isolated_model`` builds it. Poses are the
 ELL inputs of :func:`formation_env.sim.kernels.ell_inputs`: ``pos`` (V, 3) NED wing origins,
 ``euler`` (V, 3) rad, ``speed``/``alpha``/``beta`` (V,) m/s, rad.
 """
@@ -143,14 +143,14 @@ def induced_drag_saving(model, state, air_density: float = AIR_DENSITY_SL) -> np
     offline use; the batched numpy reference is :func:`formation_env.wake.loads.formation_benefit`.
     """
     from .arrays import wake_arrays
-    from .loads import _alone_model
+    from .loads import isolated_model
 
     if not (np.isfinite(air_density) and air_density > 0):
         raise ValueError(f"induced_drag_saving: air_density must be finite and > 0, got {air_density!r}")
     state = model._check_state(state)
     origin = np.zeros(3)
     wake = wake_arrays(model, origin)
-    alone = [wake_arrays(_alone_model(v, model.core, model.eval_points, model.rotational, model.kinematic_viscosity,
+    alone = [wake_arrays(isolated_model(v, model.core, model.eval_points, model.rotational, model.kinematic_viscosity,
                                       model.viscous_aic), origin) for v in model.vehicles]
     same = all(v == model.vehicles[0] for v in model.vehicles)
     nb_, nv, n = state.batch_size, model.n_vehicles, model.n_panels

@@ -21,7 +21,7 @@ from ..frames import dcm_ned_to_body
 from .model import WakeModel, WakeSolution
 from .state import FormationState
 
-__all__ = ["VehicleLoads", "vehicle_loads", "isolated_loads", "formation_benefit", "AIR_DENSITY_SL"]
+__all__ = ["VehicleLoads", "vehicle_loads", "isolated_loads", "formation_benefit", "isolated_model", "AIR_DENSITY_SL"]
 
 AIR_DENSITY_SL = 1.225  # kg/m^3
 
@@ -96,7 +96,8 @@ def vehicle_loads(model: WakeModel, state: FormationState, solution: WakeSolutio
 
 
 @lru_cache(maxsize=64)
-def _alone_model(vehicle, core, eval_points, rotational, kinematic_viscosity, viscous_aic) -> WakeModel:
+def isolated_model(vehicle, core, eval_points, rotational, kinematic_viscosity, viscous_aic) -> WakeModel:
+    """The one-vehicle model of ``vehicle`` with a formation model's options (built once per make-up)."""
     # Vehicles are frozen (hashable) dataclasses: the isolated model of each is built once.
     return WakeModel([vehicle], core=core, eval_points=eval_points, rotational=rotational,
                      kinematic_viscosity=kinematic_viscosity, viscous_aic=viscous_aic)
@@ -106,7 +107,7 @@ def isolated_loads(model: WakeModel, state: FormationState, air_density: float =
     """Loads each vehicle would have flying alone with the same pose and air data."""
     per_vehicle = []
     for v, vehicle in enumerate(model.vehicles):
-        alone = _alone_model(vehicle, model.core, model.eval_points, model.rotational, model.kinematic_viscosity,
+        alone = isolated_model(vehicle, model.core, model.eval_points, model.rotational, model.kinematic_viscosity,
                              model.viscous_aic)
         sv = FormationState(state.position_ned[:, v:v + 1], state.euler_rad[:, v:v + 1], state.airspeed_mps[:, v:v + 1],
                             state.alpha_rad[:, v:v + 1], state.beta_rad[:, v:v + 1])
@@ -132,3 +133,5 @@ def formation_benefit(model: WakeModel, state: FormationState, solution: WakeSol
     out["formation"] = form
     out["isolated"] = alone
     return out
+
+

@@ -98,7 +98,7 @@ def test_close_formation_saving_from_aircraft_state():
     from formation_env.sim.formation import FormationSimulator
     from formation_env.sim.kernels import ell_inputs
     from formation_env.sim.params import wake_arrays  # re-export of formation_env.wake.arrays
-    from formation_env.wake.loads import _alone_model
+    from formation_env.wake.loads import isolated_model
 
     data = json.loads(resources.files("formation_env").joinpath("data/close_formation_map.json").read_text())
     sim = FormationSimulator(2, 1)
@@ -111,7 +111,7 @@ def test_close_formation_saving_from_aircraft_state():
     speed, alpha, beta = np.empty(nv), np.empty(nv), np.empty(nv)
     ell_inputs(x, np.zeros((nv, 3)), np.asarray(sim.wing_origin_body, float), pos, euler, speed, alpha, beta)
     wake = wake_arrays(model, sim.wing_origin_body)
-    alone = wake_arrays(_alone_model(model.vehicles[0], model.core, model.eval_points, model.rotational,
+    alone = wake_arrays(isolated_model(model.vehicles[0], model.core, model.eval_points, model.rotational,
                                      model.kinematic_viscosity, model.viscous_aic), sim.wing_origin_body)
     gamma, vpts = np.empty(n), np.empty((n, 3))
     w = wake
