@@ -77,7 +77,22 @@ class PIDFormation:
 
     action_mode = "setpoints"
 
-    def __init__(self, gains: PIDFormationGains | None = None, control_hz: float = 10.0) -> None:
+    def __init__(self, gains: PIDFormationGains | None = None, control_hz: float = 10.0, *,
+                 setpoint_low_m=None, setpoint_high_m=None, speed_range_mps: float | None = None) -> None:
+        """``setpoint_low_m`` / ``setpoint_high_m`` (3,) and ``speed_range_mps``: the env's set-point ranges
+        (:func:`formation_env.sim.params.setpoint_ranges`; default +-5 m and 2 m/s), so that the offsets
+        this controller computes map to the actions that command them (an axis with no range is held)."""
+        self.setpoint_low_m = (np.full(3, -SETPOINT_POSITION_SCALE_M) if setpoint_low_m is None
+                               else np.asarray(setpoint_low_m, dtype=float).reshape(3))
+        self.setpoint_high_m = (np.full(3, SETPOINT_POSITION_SCALE_M) if setpoint_high_m is None
+                                else np.asarray(setpoint_high_m, dtype=float).reshape(3))
+        self.speed_range_mps = SETPOINT_SPEED_SCALE_MPS if speed_range_mps is None else float(speed_range_mps)
+        if (not np.all(np.isfinite(self.setpoint_low_m)) or not np.all(np.isfinite(self.setpoint_high_m))
+                or np.any(self.setpoint_low_m > 0) or np.any(self.setpoint_high_m < 0)):
+            raise ValueError(f"PIDFormation: set-point ranges must be finite with low <= 0 <= high, got "
+                             f"{self.setpoint_low_m} and {self.setpoint_high_m}")
+        if not (math.isfinite(self.speed_range_mps) and self.speed_range_mps > 0):
+            raise ValueError(f"PIDFormation: speed_range_mps must be > 0, got {speed_range_mps!r}")
         self.gains = PIDFormationGains() if gains is None else gains
         if not isinstance(self.gains, PIDFormationGains):
             raise ValueError(f"PIDFormation: gains must be a PIDFormationGains, got {type(gains).__name__}")
@@ -86,6 +101,14 @@ class PIDFormation:
             raise ValueError(f"PIDFormation: control_hz must be a finite number > 0, got {control_hz!r}")
         self.control_hz = float(control_hz)
         self.integral = np.zeros((0, 3))
+
+    def _to_action(self, offset_m, axis: int) -> np.ndarray:
+        """The action that commands ``offset_m`` on ``axis`` (the inverse of the env's piecewise-linear
+        set-point map; beyond the range it exceeds 1 and is clipped; 0 on an axis with no range)."""
+        hi, lo = self.setpoint_high_m[axis], -self.setpoint_low_m[axis]
+        up = offset_m / hi if hi > 0 else np.zeros_like(offset_m)
+        down = offset_m / lo if lo > 0 else np.zeros_like(offset_m)
+        return np.where(offset_m >= 0, up, down)
 
     def reset(self, n_rows: int) -> None:
         if isinstance(n_rows, bool) or not isinstance(n_rows, (int, np.integer)) or n_rows < 1:
@@ -116,8 +139,8 @@ class PIDFormation:
         dy = -g.kp_cross * err[:, 1] - g.ki_cross * self.integral[:, 1]
         dz = -g.kp_down * err[:, 2] - g.ki_down * self.integral[:, 2] + g.k_energy * np.maximum(-err[:, 0], 0.0)
         dx = -g.kp_lead * err[:, 0]
-        raw = np.stack([dx / SETPOINT_POSITION_SCALE_M, dy / SETPOINT_POSITION_SCALE_M, dz / SETPOINT_POSITION_SCALE_M,
-                        dv / SETPOINT_SPEED_SCALE_MPS], axis=1)
+        raw = np.stack([self._to_action(dx, 0), self._to_action(dy, 1), self._to_action(dz, 2),
+                        dv / self.speed_range_mps], axis=1)
         act = np.clip(raw, -1.0, 1.0)
         # conditional integration: integrate only the channels that are not saturated (or that the
         # error would drive out of saturation)

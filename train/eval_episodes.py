@@ -3,6 +3,7 @@ per-episode metric (the table in :mod:`train.evaluate`)."""
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Callable, Sequence
 
 import numpy as np
@@ -11,16 +12,32 @@ __all__ = ["eval_env_config", "run_episodes", "SPAN_M", "SUCCESS_WINDOW_S"]
 
 SPAN_M = 2.9
 SUCCESS_WINDOW_S = 5.0
+DEFAULT_TURBULENCE_SIGMA_MPS = 1.0  # the test set's Dryden level (scenarios without a task preset)
 
 
-def eval_env_config(scenario: str, action_mode: str, *, turbulence_sigma_mps: float = 1.0, wake: bool = True,
+def eval_env_config(scenario: str, action_mode: str, *, turbulence_sigma_mps: float | None = None, wake: bool = True,
                     control_hz: float = 10.0, compute_benefit: bool = False, duration_s: float | None = None,
                     turbulence_field: str = "frozen"):
     """The evaluation episodes' EnvConfig: the thesis scenario with wake and Dryden turbulence on. With
     its defaults (sigma 1 m/s, wake on, the scenario's duration, no other randomisation) it is the test
-    set's distribution, which the training's validation (model selection) also uses."""
+    set's distribution, which the training's validation (model selection) also uses. A scenario with a
+    task preset (:mod:`formation_env.envs.tasks`: ``wake_surfing``) keeps its preset's randomisation and
+    reward, with the benefit on, at ``turbulence_sigma_mps`` (None: the preset's level)."""
     from formation_env.envs.config import EnvConfig, Randomisation
+    from formation_env.envs.tasks import task_options
 
+    task = task_options(scenario)
+    if task:  # a task preset (wake_surfing): its randomisation, reward and benefit, with this turbulence
+        rnd = task.pop("randomisation")
+        if turbulence_sigma_mps is not None:
+            rnd = dataclasses.replace(rnd, turbulence_sigma_mps=turbulence_sigma_mps)
+        task.pop("action_mode", None)
+        task["compute_benefit"] = True
+        return EnvConfig(scenario=scenario, learning="followers", action_mode=action_mode, wake=wake,
+                         control_hz=control_hz, duration_s=duration_s, turbulence_field=turbulence_field,
+                         randomisation=rnd, **task)
+    if turbulence_sigma_mps is None:
+        turbulence_sigma_mps = DEFAULT_TURBULENCE_SIGMA_MPS
     return EnvConfig(scenario=scenario, learning="followers", action_mode=action_mode, wake=wake, control_hz=control_hz,
                      compute_benefit=compute_benefit, duration_s=duration_s, turbulence_field=turbulence_field,
                      randomisation=Randomisation(turbulence_sigma_mps=turbulence_sigma_mps))
@@ -49,7 +66,8 @@ def run_episodes(act: Callable[[np.ndarray], np.ndarray], config, seeds: Sequenc
     agents = list(core.agent_indices)
     b, a_n = len(seeds), len(agents)
     alive = np.ones(b, dtype=bool)
-    series = {k: [] for k in ("t", "err", "sep", "act", "cmd", "saving", "final_err")}
+    series = {k: [] for k in ("t", "err", "sep", "act", "cmd", "saving", "final_err", "box")}
+    has_box = sc.safe_box_b is not None
     end_step = np.zeros(b, dtype=np.int64)
     returns = np.zeros(b)
     collided = np.zeros(b, dtype=bool)
@@ -78,6 +96,7 @@ def run_episodes(act: Callable[[np.ndarray], np.ndarray], config, seeds: Sequenc
         series["act"].append(np.where(alive[:, None, None], act_now, np.nan))
         series["cmd"].append(np.where(alive[:, None, None], eng.commands[:, agents], np.nan))
         series["saving"].append(np.where(alive[:, None], core.last_saving[:, agents], np.nan))
+        series["box"].append(np.where(alive[:, None], eng.out.box_depth_m[:, agents], np.nan))
         if moving:
             fe = np.full((b, a_n), np.nan)
             vd0 = eng.velocity_demand[:, 0]
@@ -108,6 +127,7 @@ def run_episodes(act: Callable[[np.ndarray], np.ndarray], config, seeds: Sequenc
     acts = np.stack(series["act"])         # (T, B, A, 4)
     cmd = np.stack(series["cmd"])
     saving = np.stack(series["saving"])
+    box = np.stack(series["box"])
     final_err = np.stack(series["final_err"]) if moving else None
     schedule_start = sc.slots[0].keyframes[1][0] if moving else 0.0
     out = []
@@ -134,6 +154,11 @@ def run_episodes(act: Callable[[np.ndarray], np.ndarray], config, seeds: Sequenc
         m["fuel_saving_pct"] = float(100.0 * (1.0 - m["fuel_used_kg"] / m["leader_fuel_kg"])) if m["leader_fuel_kg"] > 0 else float("nan")
         if core.benefit_enabled:
             m["induced_drag_saving"] = float(np.mean(saving[:n, i]))
+        if has_box:
+            out_of_box = box[:n, i] > 0.0  # (T, A)
+            m["box_outside_frac"] = float(np.mean(out_of_box))
+            m["box_outside_longest_s"] = float(max(_longest_run(out_of_box[:, j]) for j in range(a_n)) / config.control_hz)
+            m["box_depth_max_m"] = float(np.max(box[:n, i]))
         if moving:
             fe = final_err[:n, i]
             ok = not (m["collision"] or m["crashed"]) and n >= round(eng.duration_s * config.control_hz)
@@ -148,6 +173,18 @@ def run_episodes(act: Callable[[np.ndarray], np.ndarray], config, seeds: Sequenc
         out.append(m)
     if keep_series:
         for i, m in enumerate(out):
+            if core.benefit_enabled:
+                m["saving_series"] = saving[:end_step[i], i].mean(axis=1).tolist()
+        for i, m in enumerate(out):
             n = end_step[i]
             m["series"] = {"t": t[:n].tolist(), "slot_error_m": err[:n, i].mean(axis=1).tolist()}
     return out
+
+
+def _longest_run(flags: np.ndarray) -> int:
+    """Length of the longest run of True in a 1-D bool array."""
+    best = run = 0
+    for f in flags:
+        run = run + 1 if f else 0
+        best = max(best, run)
+    return best

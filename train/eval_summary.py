@@ -13,7 +13,7 @@ __all__ = ["summarise", "selection_score"]
 
 _MEAN_KEYS = ("return", "rms_slot_error_m", "max_slot_error_m", "time_within_1m_s", "time_within_1m_frac",
               "control_effort_rad", "throttle_mean", "action_rms", "fuel_used_kg", "leader_fuel_kg", "fuel_saving_pct",
-              "induced_drag_saving", "duration_s")
+              "induced_drag_saving", "duration_s", "box_outside_frac")
 
 
 def summarise(episodes: list[dict], *, n_boot: int = N_BOOT, seed: int = 0) -> dict:
@@ -38,6 +38,13 @@ def summarise(episodes: list[dict], *, n_boot: int = N_BOOT, seed: int = 0) -> d
     s["collision_rate"] = s["collisions"] / n
     s["collision_rate_ci"] = list(wilson_interval(s["collisions"], n))
     s["crashes"] = int(sum(e["crashed"] for e in episodes))
+    if "box_outside_longest_s" in episodes[0]:
+        longest = np.array([e["box_outside_longest_s"] for e in episodes], dtype=float)
+        s["box_outside_longest_s_worst"] = float(np.max(longest))
+        s["box_outside_over_1s"] = int(np.sum(longest > 1.0))
+    if "induced_drag_saving" in episodes[0]:
+        sv = np.array([e["induced_drag_saving"] for e in episodes], dtype=float)
+        s["induced_drag_saving_ci"] = list(bootstrap_ci(sv, "mean", n_boot=n_boot, seed=seed))
     if "reconfig_success" in episodes[0]:
         k = int(sum(e["reconfig_success"] for e in episodes))
         s["reconfig_success_rate"] = k / n
@@ -49,9 +56,13 @@ def summarise(episodes: list[dict], *, n_boot: int = N_BOOT, seed: int = 0) -> d
 
 def selection_score(summary: dict) -> float:
     """Lower is better: the model-selection criterion of the eval callback (RMS slot error; a
-    collision or crash disqualifies; failed reconfigurations add 100 m each as a fraction)."""
+    collision or crash disqualifies; failed reconfigurations add 100 m each as a fraction; in a
+    safe-box task, minus the mean induced-drag saving plus the fraction of episodes that left the box
+    for more than 1 s)."""
     if summary["collisions"] or summary["crashes"]:
         return float("inf")
+    if "box_outside_over_1s" in summary:  # a safe-box task (wake surfing): the saving, inside the box
+        return float(-summary["induced_drag_saving"] + summary["box_outside_over_1s"] / summary["episodes"])
     score = summary["rms_slot_error_m"]
     if "reconfig_success_rate" in summary:
         score += 100.0 * (1.0 - summary["reconfig_success_rate"])

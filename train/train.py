@@ -219,7 +219,8 @@ def _callbacks(cfg: TrainConfig, run_dir: Path, state: dict, log: Callable[[str]
             score = selection_score(summ)
             entry = {"num_timesteps": int(self.num_timesteps), "score": score, **summ}
             state["evaluations"].append(entry)
-            for k in ("rms_slot_error_m", "return", "collisions", "reconfig_success_rate", "min_separation_m"):
+            for k in ("rms_slot_error_m", "return", "collisions", "reconfig_success_rate", "min_separation_m",
+                      "induced_drag_saving", "box_outside_over_1s"):
                 if k in summ:
                     self.logger.record(f"eval/{k}", summ[k])
             best = state.get("best_score")
@@ -232,6 +233,8 @@ def _callbacks(cfg: TrainConfig, run_dir: Path, state: dict, log: Callable[[str]
             log(f"[eval] steps {self.num_timesteps}: RMS slot error {summ['rms_slot_error_m']:.3f} m, "
                 f"collisions {summ['collisions']}, crashes {summ['crashes']}"
                 + (f", reconfig success {summ['reconfig_success_rate']:.2f}" if "reconfig_success_rate" in summ else "")
+                + (f", saving {summ['induced_drag_saving']:.3f}, >1 s outside the box {summ['box_outside_over_1s']}"
+                   if "box_outside_over_1s" in summ else "")
                 + f", score {score:.3f} (best {state['best_score']:.3f} at {state['best_steps']})")
 
     class Progress(BaseCallback):

@@ -36,11 +36,18 @@ class RewardWeights:
             - effort * |a|^2 / 4 - rate * |a - a_prev|^2 / 4
             + benefit * induced-drag saving
             - (collision + F) * [collision] - (crash + F) * [left the envelope or non-finite]
+            - box * (1 + h(q / box_scale)) * [q > 0]        q: distance outside the scenario's safe box
 
     F = terminal_forfeit * slot * h(min(e_prev, 100 m) / slot_scale_m) * (decisions left until the time
     limit): ending the episode forfeits the slot costs still to come, so a collision or crash must charge
     them, or ending early would pay (with terminal_forfeit = 1 the episode is never cheaper to end than to
     fly on at the current error).
+
+    The safe box (:attr:`formation_env.scenarios.Scenario.safe_box_b`, relative to vehicle 0 in the slot frame)
+    exists only in scenarios that define one (``wake_surfing``); q = 0 elsewhere. Its cost is a step of
+    ``box`` as soon as the UAV is outside (a constraint, not a shaping: it must outweigh any saving the
+    ELL reports beyond the box, up to ~0.8 in the band around the leader's wake plane the box excludes)
+    plus h of the depth in ``box_scale_b`` spans (quadratic near the wall, linear far out).
 
     d_safe = ``barrier_separation_b`` spans, d_coll = the env's ``collision_separation_b`` spans. The slot
     term never saturates: it keeps decreasing with the error however far the UAV drifts. The shaping
@@ -59,11 +66,14 @@ class RewardWeights:
     barrier_separation_b: float = 1.2
     collision: float = 50.0
     crash: float = 50.0
+    box: float = 0.0
+    box_scale_b: float = 0.1
 
     def __post_init__(self) -> None:
         for f in fields(self):
             _finite("RewardWeights", f.name, getattr(self, f.name), minimum=0.0)
         _finite("RewardWeights", "slot_scale_m", self.slot_scale_m, positive=True)
+        _finite("RewardWeights", "box_scale_b", self.box_scale_b, positive=True)
         if self.shaping_gamma > 1.0:
             raise ValueError(f"RewardWeights: shaping_gamma must be in [0, 1], got {self.shaping_gamma!r}")
 
@@ -75,6 +85,9 @@ class Randomisation:
     initial_offset_m: std of each follower's initial position jitter (NED, m).
     slot_offset_b: std of each slot's offset jitter (spans), applied to the whole schedule.
     steady_wind_mps: maximum steady horizontal wind speed (uniform in [0, max], random direction).
+    crosswind_mps: maximum steady crosswind, perpendicular to the reference's initial track (uniform in
+        +-max; added to the steady wind). A crosswind crabs the formation and turns the wake, which
+        trails along the air-relative velocity, against the track (the wake-surfing task's moving optimum).
     turbulence_sigma_mps: Dryden intensity (m/s, all axes; MIL-F-8785C low-altitude scale lengths); the
         field is one frozen field per formation or independent per UAV (EnvConfig.turbulence_field).
     leader_turn_deg, leader_climb_m, leader_speed_mps: amplitude of one random manoeuvre of the
@@ -85,6 +98,7 @@ class Randomisation:
     initial_offset_m: float = 0.0
     slot_offset_b: float = 0.0
     steady_wind_mps: float = 0.0
+    crosswind_mps: float = 0.0
     turbulence_sigma_mps: float = 0.0
     leader_turn_deg: float = 0.0
     leader_climb_m: float = 0.0

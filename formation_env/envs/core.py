@@ -143,6 +143,7 @@ class FormationCore:
             }
             if self.benefit_enabled:
                 info["induced_drag_saving"] = float(out.saving[i, v])
+            info["box_depth_m"] = float(out.box_depth_m[i, v])
             for key, name in zip(INFO_REWARD_KEYS, _REWARD_TERM_NAMES):
                 info[key] = 0.0 if terms is None else float(terms[name][v])
             if not clean:

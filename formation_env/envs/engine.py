@@ -24,8 +24,8 @@ from ..scenarios import AEROSONDE_SPAN_M, Scenario, get_scenario
 from ..sim import WakeConfig
 from ..sim.observe import REWARD_TERMS
 from ..sim.params import (ACTION_MODE_CODES, RESIDUAL_SCALE, SETPOINT_POSITION_SCALE_M, SETPOINT_SPEED_SCALE_MPS,
-                          ActionParams, RewardParams, StepParams, aircraft_arrays, scenario_arrays, turbulence_params,
-                          wake_arrays)
+                          ActionParams, RewardParams, StepParams, aircraft_arrays, safe_box_arrays, scenario_arrays,
+                          setpoint_ranges, setpoint_speed_range, turbulence_params, wake_arrays)
 from ..sim.state import init_output, init_state
 from ..sim.step import observe, refresh, step
 from ..wake import WakeModel
@@ -90,12 +90,13 @@ class FormationEpisode:
             fcs_params(fc, sc.dt),
             ActionParams(ACTION_MODE_CODES[config.action_mode], self.mask.copy(),
                          np.ascontiguousarray(self.trim.controls[0, :4], float), surface_scale(lim),
-                         np.asarray(RESIDUAL_SCALE, float), SETPOINT_POSITION_SCALE_M, SETPOINT_SPEED_SCALE_MPS,
+                         np.asarray(RESIDUAL_SCALE, float), *setpoint_ranges(sc), setpoint_speed_range(sc),
                          np.array([-lim, -lim, -lim, self.throttle_limits[0]]),
                          np.array([lim, lim, lim, self.throttle_limits[1]])),
             RewardParams(w.slot, w.slot_scale_m, w.effort, w.rate, w.benefit, w.progress, w.shaping_gamma,
                          w.terminal_forfeit, w.separation, w.barrier_separation_b * AEROSONDE_SPAN_M, w.collision, w.crash,
-                         config.collision_separation_b * AEROSONDE_SPAN_M),
+                         config.collision_separation_b * AEROSONDE_SPAN_M, w.box, w.box_scale_b * AEROSONDE_SPAN_M,
+                         *safe_box_arrays(sc)),
             turbulence_params(sc, sigma), float(sc.airspeed_mps))
         self.sim_state = init_state(self.batch_size, v, lattice.n_panels, self.params.field)
         self.out = init_output(self.batch_size, v, observation_size(v))
@@ -127,6 +128,8 @@ class FormationEpisode:
                 s.steady_wind[i] = [speed * math.cos(direction), speed * math.sin(direction), 0.0]
             else:
                 s.steady_wind[i] = 0.0
+            if rnd.crosswind_mps > 0:  # the reference flies north at the start: east is the crosswind
+                s.steady_wind[i, 1] += rng.uniform(-rnd.crosswind_mps, rnd.crosswind_mps)
             s.manoeuvre[i] = 0.0
             if rnd.any_manoeuvre:
                 s.manoeuvre[i] = [rng.uniform(0.0, 0.5 * self.duration_s),
@@ -157,6 +160,7 @@ class FormationEpisode:
         self.out.crashed[idx] = False
         self.out.saving[idx] = 0.0
         self.out.reward_terms[idx] = 0.0
+        self.out.box_depth_m[idx] = 0.0
 
     # ------------------------------------------------------------------ step
     def decide(self, actions: np.ndarray):

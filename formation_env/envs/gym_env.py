@@ -28,6 +28,8 @@ import numpy as np
 from .config import EnvConfig
 from .parallel import FormationParallelEnv, make_config
 
+from .tasks import task_options
+
 __all__ = ["FormationGymEnv", "GYM_IDS", "register_envs"]
 
 GYM_IDS = {
@@ -38,6 +40,7 @@ GYM_IDS = {
     "formation_env/Echelon-v0": ("echelon", 1),
     "formation_env/Vee-v0": ("vee", 1),
     "formation_env/CloseFormation-v0": ("close_formation", 1),
+    "formation_env/WakeSurfing-v0": ("wake_surfing", 1),
 }
 
 
@@ -125,5 +128,5 @@ def register_envs() -> None:
     for env_id, (scenario, learner) in GYM_IDS.items():
         if env_id not in gym.registry:
             gym.register(env_id, entry_point="formation_env.envs.gym_env:FormationGymEnv",
-                         max_episode_steps=_episode_decisions(EnvConfig(scenario=scenario)),
+                         max_episode_steps=_episode_decisions(EnvConfig(scenario=scenario, **task_options(scenario))),
                          kwargs={"scenario": scenario})

@@ -42,7 +42,9 @@ def make_config(config: EnvConfig | None = None, **options) -> EnvConfig:
     if config is not None and not isinstance(config, EnvConfig):
         raise ValueError(f"config must be an EnvConfig, got {type(config).__name__}")
     if config is None:
-        return EnvConfig(**options)
+        from .tasks import task_options
+
+        return EnvConfig(**{**task_options(options.get("scenario", "formation_keeping")), **options})
     if options:
         raise ValueError("give either config or keyword options, not both")
     return config

@@ -15,7 +15,8 @@ import numpy as np
 from ..aircraft.kernels import _air
 from ..frames import quaternion_dcm_terms
 
-__all__ = ["observe_formation", "reward_formation", "REWARD_TERMS", "OBS_CLIP", "OMEGA_REF", "min_separation_each", "signed_log"]
+__all__ = ["observe_formation", "reward_formation", "REWARD_TERMS", "OBS_CLIP", "OMEGA_REF", "min_separation_each", "signed_log",
+           "box_depth_each"]
 
 _jit = nb.njit(cache=True, error_model="numpy")
 
@@ -29,7 +30,7 @@ VELOCITY_SCALE_MPS = 1.0
 WIND_SCALE_MPS = 1.0
 NEIGHBOUR_POSITION_SCALE_M = 3.0
 CONTROLLER_STATE_SCALE = 1.0
-REWARD_TERMS = ("slot", "progress", "separation", "effort", "rate", "benefit", "collision", "crash")
+REWARD_TERMS = ("slot", "progress", "separation", "effort", "rate", "benefit", "collision", "crash", "box")
 _ERROR_CAP_M = 5000.0  # beyond any reachable distance: only bounds a diverged UAV's reward
 _TERMINAL_ERROR_CAP_M = 100.0
 
@@ -142,6 +143,23 @@ def min_separation_each(x, out):
 
 
 @_jit
+def box_depth_each(x, chi, low, high, out):
+    """(V,) distance (m) of each UAV outside its safe box, 0 inside: the box is ``low``..``high`` (V, 3)
+    relative to vehicle 0 in the slot frame (x along the track at angle ``chi`` rad from north, y
+    starboard, z down). Non-finite positions count as 0 here (the episode is ending; the crash term
+    charges it)."""
+    c, s = math.cos(chi), math.sin(chi)
+    for a in range(x.shape[0]):
+        dn, de, dd = x[a, 10] - x[0, 10], x[a, 11] - x[0, 11], x[a, 12] - x[0, 12]
+        rel = (c * dn + s * de, -s * dn + c * de, dd)
+        depth2 = 0.0
+        for k in range(3):
+            over = max(low[a, k] - rel[k], rel[k] - high[a, k], 0.0)
+            depth2 += over * over
+        out[a] = math.sqrt(depth2) if depth2 == depth2 else 0.0
+
+
+@_jit
 def _huber(x):
     ax = abs(x)
     return 0.5 * ax * ax if ax <= 1.0 else ax - 0.5
@@ -154,10 +172,11 @@ def _capped(e):
 
 @_jit
 def reward_formation(w, error, previous_error, action, previous_action, saving, separation, collided, crashed,
-                     remaining_decisions, out):
-    """Reward terms (V, 8) in :data:`REWARD_TERMS` order of one formation (the definition:
+                     remaining_decisions, box_depth, out):
+    """Reward terms (V, 9) in :data:`REWARD_TERMS` order of one formation (the definition:
     :class:`formation_env.envs.config.RewardWeights`). error, previous_error (V,) m; separation (V,)
-    m to the nearest UAV; collided bool; crashed (V,) bool; remaining_decisions until the time limit."""
+    m to the nearest UAV; collided bool; crashed (V,) bool; remaining_decisions until the time limit;
+    box_depth (V,) m outside the safe box (0 inside)."""
     d_safe = w.barrier_separation_m
     for a in range(error.shape[0]):
         err, prev = _capped(error[a]), _capped(previous_error[a])
@@ -180,3 +199,4 @@ def reward_formation(w, error, previous_error, action, previous_action, saving, 
         out[a, 5] = w.benefit * saving[a] if math.isfinite(saving[a]) else 0.0
         out[a, 6] = -(w.collision + forfeit) if collided else 0.0
         out[a, 7] = -(w.crash + forfeit) if crashed[a] else 0.0
+        out[a, 8] = -w.box * (1.0 + _huber(box_depth[a] / w.box_scale_m)) if box_depth[a] > 0.0 else 0.0

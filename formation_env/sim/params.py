@@ -23,7 +23,8 @@ from ..wake.arrays import WakeArrays, wake_arrays
 from .kernels import pack_limits
 
 __all__ = ["AircraftArrays", "WakeArrays", "ScenarioArrays", "ActionParams", "RewardParams", "StepParams",
-           "ACTION_MODE_CODES", "wake_arrays", "scenario_arrays", "SURFACES", "RESIDUAL", "SETPOINTS"]
+           "ACTION_MODE_CODES", "wake_arrays", "scenario_arrays", "SURFACES", "RESIDUAL", "SETPOINTS", "safe_box_arrays",
+           "setpoint_ranges", "setpoint_speed_range"]
 
 SURFACES, RESIDUAL, SETPOINTS = 0, 1, 2
 ACTION_MODE_CODES = {"surfaces": SURFACES, "residual": RESIDUAL, "setpoints": SETPOINTS}
@@ -75,7 +76,8 @@ class ActionParams(NamedTuple):
     trim_controls: np.ndarray  # (4,) elevator, aileron, rudder rad, throttle
     surface_scale: np.ndarray  # (4,) per unit action in surfaces mode
     residual_scale: np.ndarray  # (4,) per unit action in residual mode
-    setpoint_position_m: float
+    setpoint_low_m: np.ndarray  # (3,) set-point offset at action -1 per axis (along, starboard, down), m (<= 0)
+    setpoint_high_m: np.ndarray  # (3,) set-point offset at action +1 per axis, m (>= 0); piecewise linear, 0 at 0
     setpoint_speed_mps: float
     command_min: np.ndarray  # (4,)
     command_max: np.ndarray  # (4,)
@@ -97,6 +99,10 @@ class RewardParams(NamedTuple):
     collision: float
     crash: float
     collision_separation_m: float
+    box: float  # safe-box penalty per decision outside the box (0: off)
+    box_scale_m: float  # depth scale of the box penalty (Huber of depth / scale), m
+    box_low_m: np.ndarray  # (V, 3) each UAV's safe box relative to vehicle 0, slot frame, m (-inf: unbounded)
+    box_high_m: np.ndarray  # (V, 3) upper corners, m (+inf: unbounded)
 
 
 class StepParams(NamedTuple):
@@ -140,6 +146,41 @@ def scenario_arrays(sc, manoeuvres: bool) -> ScenarioArrays:
     gusts = np.array([[*g.amplitude_ned, g.start_s, g.rise_s, g.hold_s, g.decay_s] for g in sc.gusts]).reshape(-1, 7)
     return ScenarioArrays(float(sc.airspeed_mps), float(sc.altitude_m), np.asarray(sc.reference_offset_ned, float),
                           times, offs, count, float(span), sc.slot_frame == "leader_demand", gusts, bool(manoeuvres))
+
+
+def safe_box_arrays(sc) -> tuple[np.ndarray, np.ndarray]:
+    """(V, 3) low and high corners of each UAV's safe box relative to vehicle 0 in the slot frame, m
+    (:attr:`formation_env.scenarios.Scenario.safe_box_b`); unbounded (+-inf) for vehicle 0 and
+    for scenarios without a box."""
+    v = sc.n_vehicles
+    low, high = np.full((v, 3), -np.inf), np.full((v, 3), np.inf)
+    if sc.safe_box_b is not None:
+        span = sc.slots[0].span_m
+        box = np.asarray(sc.safe_box_b, float) * span  # (3, 2)
+        low[1:], high[1:] = box[:, 0], box[:, 1]
+    return low, high
+
+
+def setpoint_ranges(sc) -> tuple[np.ndarray, np.ndarray]:
+    """(3,) set-point offsets (m, slot frame: along, starboard, down) of the ``setpoints`` action at -1 and
+    +1 per axis (piecewise linear, the slot at 0): +-5 m on every axis, or, in a scenario with a safe
+    box, the box around the first follower's starting slot with the along-track offset fixed (0).
+    The speed set-point's range is :func:`setpoint_speed_range`."""
+    if sc.safe_box_b is None:
+        return np.full(3, -SETPOINT_POSITION_SCALE_M), np.full(3, SETPOINT_POSITION_SCALE_M)
+    slot = np.asarray(sc.slots[0].keyframes[0][1], float)
+    box = np.asarray(sc.safe_box_b, float)
+    span = sc.slots[0].span_m
+    low, high = (box[:, 0] - slot) * span, (box[:, 1] - slot) * span
+    low[0] = high[0] = 0.0
+    return low, high
+
+
+def setpoint_speed_range(sc) -> float:
+    """m/s of speed demand per unit ``setpoints`` action a3: 2 m/s, or 4 m/s with a safe box (the
+    along-track set-point is fixed there, so the speed demand alone must hold the follower's station
+    against an along-track wind: the thesis PID's airspeed hold lags 8 m per 1 m/s)."""
+    return SETPOINT_SPEED_SCALE_MPS if sc.safe_box_b is None else 2.0 * SETPOINT_SPEED_SCALE_MPS
 
 
 def turbulence_params(sc, sigma_mps: float) -> FrozenFieldParams:

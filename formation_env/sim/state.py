@@ -48,7 +48,7 @@ class StepOutput(NamedTuple):
 
     observation: np.ndarray  # (B, V, D) float64
     reward: np.ndarray  # (B, V) total reward
-    reward_terms: np.ndarray  # (B, V, 8) in formation_env.sim.observe.REWARD_TERMS order
+    reward_terms: np.ndarray  # (B, V, 9) in formation_env.sim.observe.REWARD_TERMS order
     terminated: np.ndarray  # (B,) bool: collision or a UAV left the envelope
     truncated: np.ndarray  # (B,) bool: time limit reached (and not terminated)
     collided: np.ndarray  # (B,) bool: two CGs came closer than the collision separation
@@ -57,6 +57,7 @@ class StepOutput(NamedTuple):
     separation_m: np.ndarray  # (B, V) distance to the nearest other UAV now
     min_separation_m: np.ndarray  # (B,) smallest CG separation seen during the decision
     saving: np.ndarray  # (B, V) induced-drag saving now (0 unless the benefit is on)
+    box_depth_m: np.ndarray  # (B, V) distance outside the UAV's safe box now, m (0 inside, or without a box)
 
 
 def init_state(batch_size: int, n_vehicles: int, n_panels: int, field_params) -> SimState:
@@ -74,7 +75,7 @@ def init_output(batch_size: int, n_vehicles: int, obs_size: int) -> StepOutput:
     return StepOutput(np.zeros((b, v, obs_size)), np.zeros((b, v)), np.zeros((b, v, len(REWARD_TERMS))),
                       np.zeros(b, dtype=np.bool_), np.zeros(b, dtype=np.bool_), np.zeros(b, dtype=np.bool_),
                       np.zeros((b, v), dtype=np.bool_), np.zeros((b, v)), np.zeros((b, v)), np.full(b, np.inf),
-                      np.zeros((b, v)))
+                      np.zeros((b, v)), np.zeros((b, v)))
 
 
 def copy_state(state: SimState) -> SimState:

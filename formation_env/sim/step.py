@@ -51,7 +51,7 @@ from .kernels import ell_inputs, step_one
 from .kernels import position_finite as _position_finite
 from .kernels import separation_each_known as _separation_each_known
 from .kernels import step_separation as _step_separation
-from .observe import observe_formation, min_separation_each, reward_formation
+from .observe import box_depth_each, observe_formation, min_separation_each, reward_formation
 from .params import RESIDUAL, SETPOINTS, SURFACES, StepParams
 from .state import SimState, StepOutput
 
@@ -109,6 +109,12 @@ def _ambient(p, s, b, t, out, g):
 
 
 @nb.njit(cache=True, error_model="numpy")
+def _setpoint_shift(a, low, high):
+    """Set-point offset (m) of one axis for action a in [-1, 1]: a * high above 0, -a * low below."""
+    return a * high if a >= 0.0 else -a * low
+
+
+@nb.njit(cache=True, error_model="numpy")
 def _control(p, s, b, actions, amb, vel, cmd, wind, pd, vd, rate, sig):
     """Commands (V, 4) of formation b: the PID (with setpoint-shifted demands) and the agents.
     wind (12,) zeroed, pd, vd (3,), rate (7,), sig (10,): scratch."""
@@ -126,12 +132,15 @@ def _control(p, s, b, actions, amb, vel, cmd, wind, pd, vd, rate, sig):
             vd[k] = s.velocity_demand[b, a, k]
         if agent and ap.mode == SETPOINTS:
             # shift the demands in the slot frame (along the demanded track, starboard, down)
+            # (piecewise linear per axis: 0 is the slot, +-1 the set-point range's ends)
             chi = math.atan2(vd[1], vd[0])
             c, sn = math.cos(chi), math.sin(chi)
-            dx, dy = actions[a, 0] * ap.setpoint_position_m, actions[a, 1] * ap.setpoint_position_m
+            dx, dy, dz = (_setpoint_shift(actions[a, 0], ap.setpoint_low_m[0], ap.setpoint_high_m[0]),
+                          _setpoint_shift(actions[a, 1], ap.setpoint_low_m[1], ap.setpoint_high_m[1]),
+                          _setpoint_shift(actions[a, 2], ap.setpoint_low_m[2], ap.setpoint_high_m[2]))
             pd[0] += c * dx - sn * dy
             pd[1] += sn * dx + c * dy
-            pd[2] += actions[a, 2] * ap.setpoint_position_m
+            pd[2] += dz
             speed = math.sqrt(vd[0] * vd[0] + vd[1] * vd[1] + vd[2] * vd[2])
             f = actions[a, 3] * ap.setpoint_speed_mps / max(speed, 1e-9)
             for k in range(3):
@@ -334,8 +343,14 @@ def decide_one(p, s, b, actions, o):
             _ambient(p, s, b, s.step[b] * p.dt_s, amb, g3)
             formation_benefit(p, s, b, amb, o.saving[b])
     remaining = max(p.episode_steps - s.step[b], 0) / p.substeps
+    if p.scenario.slot_along_leader_demand:  # the slot frame: the safe box is drawn in it
+        chi = math.atan2(s.velocity_demand[b, 0, 1], s.velocity_demand[b, 0, 0])
+    else:
+        chi = math.atan2(vel[0, 1], vel[0, 0])
+    box_depth_each(s.aircraft[b], chi if math.isfinite(chi) else 0.0, p.reward.box_low_m, p.reward.box_high_m,
+                   o.box_depth_m[b])
     reward_formation(p.reward, o.slot_error_m[b], s.previous_error[b], actions, s.previous_action[b], o.saving[b],
-                     o.separation_m[b], collided, o.crashed[b], remaining, o.reward_terms[b])
+                     o.separation_m[b], collided, o.crashed[b], remaining, o.box_depth_m[b], o.reward_terms[b])
     for a in range(nv):
         total = 0.0
         for k in range(o.reward_terms.shape[2]):
