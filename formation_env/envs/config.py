@@ -36,7 +36,7 @@ class RewardWeights:
             - effort * |a|^2 / 4 - rate * |a - a_prev|^2 / 4
             + benefit * induced-drag saving
             - (collision + F) * [collision] - (crash + F) * [left the envelope or non-finite]
-            - box * (1 + h(q / box_scale)) * [q > 0]        q: distance outside the scenario's safe box
+            - box * (1 + h(min(q / box_scale, 5))) * [q > 0]  q: distance outside the scenario's safe box
 
     F = terminal_forfeit * slot * h(min(e_prev, 100 m) / slot_scale_m) * (decisions left until the time
     limit): ending the episode forfeits the slot costs still to come, so a collision or crash must charge

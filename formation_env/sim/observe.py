@@ -33,6 +33,7 @@ CONTROLLER_STATE_SCALE = 1.0
 REWARD_TERMS = ("slot", "progress", "separation", "effort", "rate", "benefit", "collision", "crash", "box")
 _ERROR_CAP_M = 5000.0  # beyond any reachable distance: only bounds a diverged UAV's reward
 _TERMINAL_ERROR_CAP_M = 100.0
+BOX_DEPTH_CAP_SCALES = 5.0  # the box cost's depth (in box_scale units) stops growing here
 
 
 @_jit
@@ -199,4 +200,7 @@ def reward_formation(w, error, previous_error, action, previous_action, saving, 
         out[a, 5] = w.benefit * saving[a] if math.isfinite(saving[a]) else 0.0
         out[a, 6] = -(w.collision + forfeit) if collided else 0.0
         out[a, 7] = -(w.crash + forfeit) if crashed[a] else 0.0
-        out[a, 8] = -w.box * (1.0 + _huber(box_depth[a] / w.box_scale_m)) if box_depth[a] > 0.0 else 0.0
+        # capped at BOX_DEPTH_CAP_SCALES: far outside the box the cost stays bounded (the returns'
+        # scale), and the step at the wall already outweighs any saving the ELL reports beyond it
+        depth_scales = min(box_depth[a] / w.box_scale_m, BOX_DEPTH_CAP_SCALES)
+        out[a, 8] = -w.box * (1.0 + _huber(depth_scales)) if box_depth[a] > 0.0 else 0.0
