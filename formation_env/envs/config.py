@@ -27,7 +27,7 @@ def _finite(owner: str, name: str, value, *, minimum: float | None = None, posit
 @dataclass(frozen=True)
 class RewardWeights:
     """Per-agent reward (per decision), with e the agent's distance from its slot (m; vehicle 0: from its
-    reference path), h the Huber function h(x) = x^2 / 2 for |x| <= 1 and |x| - 1/2 beyond, d its
+    reference path; in a scenario with a safe box, its along-track distance only), h the Huber function h(x) = x^2 / 2 for |x| <= 1 and |x| - 1/2 beyond, d its
     distance to the nearest other UAV and a its normalised action:
 
         r = - slot * h(e / slot_scale_m)                                   quadratic near the slot, linear far

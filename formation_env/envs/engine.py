@@ -25,7 +25,8 @@ from ..sim import WakeConfig
 from ..sim.observe import REWARD_TERMS
 from ..sim.params import (ACTION_MODE_CODES, RESIDUAL_SCALE, SETPOINT_POSITION_SCALE_M, SETPOINT_SPEED_SCALE_MPS,
                           ActionParams, RewardParams, StepParams, aircraft_arrays, safe_box_arrays, scenario_arrays,
-                          setpoint_ranges, setpoint_speed_range, turbulence_params, wake_arrays)
+                          setpoint_ranges, setpoint_speed_range, slot_error_axes, turbulence_params,
+                          wake_arrays)
 from ..sim.state import init_output, init_state
 from ..sim.step import observe, refresh, step
 from ..wake import WakeModel
@@ -96,7 +97,7 @@ class FormationEpisode:
             RewardParams(w.slot, w.slot_scale_m, w.effort, w.rate, w.benefit, w.progress, w.shaping_gamma,
                          w.terminal_forfeit, w.separation, w.barrier_separation_b * AEROSONDE_SPAN_M, w.collision, w.crash,
                          config.collision_separation_b * AEROSONDE_SPAN_M, w.box, w.box_scale_b * AEROSONDE_SPAN_M,
-                         *safe_box_arrays(sc)),
+                         *safe_box_arrays(sc), slot_error_axes(sc)),
             turbulence_params(sc, sigma), float(sc.airspeed_mps))
         self.sim_state = init_state(self.batch_size, v, lattice.n_panels, self.params.field)
         self.out = init_output(self.batch_size, v, observation_size(v))
@@ -155,7 +156,11 @@ class FormationEpisode:
             frozen_field_reset(self.params.field, s.field, idx, field_seeds)
         refresh(self.params, s, idx, self.out)
         err = s.aircraft[idx][..., 10:13] - s.position_demand[idx]
-        s.previous_error[idx] = np.linalg.norm(err, axis=-1)
+        if sc.safe_box_b is None:
+            s.previous_error[idx] = np.linalg.norm(err, axis=-1)
+        else:  # the along-track error (slot_error_axes), in the slot frame of vehicle 0's demanded track
+            chi = np.arctan2(s.velocity_demand[idx, 0, 1], s.velocity_demand[idx, 0, 0])[:, None]
+            s.previous_error[idx] = np.abs(np.cos(chi) * err[..., 0] + np.sin(chi) * err[..., 1])
         self.out.collided[idx] = False
         self.out.crashed[idx] = False
         self.out.saving[idx] = 0.0

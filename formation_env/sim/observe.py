@@ -16,7 +16,7 @@ from ..aircraft.kernels import _air
 from ..frames import quaternion_dcm_terms
 
 __all__ = ["observe_formation", "reward_formation", "REWARD_TERMS", "OBS_CLIP", "OMEGA_REF", "min_separation_each", "signed_log",
-           "box_depth_each"]
+           "box_depth_each", "slot_error"]
 
 _jit = nb.njit(cache=True, error_model="numpy")
 
@@ -141,6 +141,17 @@ def min_separation_each(x, out):
                 if d < best or d != d:
                     best = d
         out[i] = best
+
+
+@_jit
+def slot_error(dn, de, dd, chi, axes):
+    """Distance (m) from the slot of a UAV displaced (dn, de, dd) NED from it, its slot-frame components
+    (along the track at angle ``chi``, starboard, down) weighted by ``axes`` (3,): (1, 1, 1) the
+    Euclidean distance; (1, 0, 0) the along-track distance only (a safe-box task: the follower is free
+    across and up/down within its box)."""
+    c, s = math.cos(chi), math.sin(chi)
+    ex, ey, ez = axes[0] * (c * dn + s * de), axes[1] * (-s * dn + c * de), axes[2] * dd
+    return math.sqrt(ex * ex + ey * ey + ez * ez)
 
 
 @_jit

@@ -24,7 +24,7 @@ from .kernels import pack_limits
 
 __all__ = ["AircraftArrays", "WakeArrays", "ScenarioArrays", "ActionParams", "RewardParams", "StepParams",
            "ACTION_MODE_CODES", "wake_arrays", "scenario_arrays", "SURFACES", "RESIDUAL", "SETPOINTS", "safe_box_arrays",
-           "setpoint_ranges", "setpoint_speed_range"]
+           "setpoint_ranges", "setpoint_speed_range", "slot_error_axes"]
 
 SURFACES, RESIDUAL, SETPOINTS = 0, 1, 2
 ACTION_MODE_CODES = {"surfaces": SURFACES, "residual": RESIDUAL, "setpoints": SETPOINTS}
@@ -103,6 +103,7 @@ class RewardParams(NamedTuple):
     box_scale_m: float  # depth scale of the box penalty (Huber of depth / scale), m
     box_low_m: np.ndarray  # (V, 3) each UAV's safe box relative to vehicle 0, slot frame, m (-inf: unbounded)
     box_high_m: np.ndarray  # (V, 3) upper corners, m (+inf: unbounded)
+    slot_error_axes: np.ndarray  # (3,) weights of the slot error's slot-frame components (along, starboard, down)
 
 
 class StepParams(NamedTuple):
@@ -174,6 +175,13 @@ def setpoint_ranges(sc) -> tuple[np.ndarray, np.ndarray]:
     low, high = (box[:, 0] - slot) * span, (box[:, 1] - slot) * span
     low[0] = high[0] = 0.0
     return low, high
+
+
+def slot_error_axes(sc) -> np.ndarray:
+    """(3,) weights of the slot error's slot-frame components: (1, 1, 1), the distance from the slot, or
+    in a scenario with a safe box (1, 0, 0), the along-track distance only (across and vertically the
+    follower is free within its box, which the reward's box term bounds)."""
+    return np.array([1.0, 1.0, 1.0]) if sc.safe_box_b is None else np.array([1.0, 0.0, 0.0])
 
 
 def setpoint_speed_range(sc) -> float:

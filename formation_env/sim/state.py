@@ -53,7 +53,7 @@ class StepOutput(NamedTuple):
     truncated: np.ndarray  # (B,) bool: time limit reached (and not terminated)
     collided: np.ndarray  # (B,) bool: two CGs came closer than the collision separation
     crashed: np.ndarray  # (B, V) bool: the UAV left the envelope (or diverged) during the decision
-    slot_error_m: np.ndarray  # (B, V) distance from the slot now
+    slot_error_m: np.ndarray  # (B, V) distance from the slot now, m (the reward's: along-track only with a safe box)
     separation_m: np.ndarray  # (B, V) distance to the nearest other UAV now
     min_separation_m: np.ndarray  # (B,) smallest CG separation seen during the decision
     saving: np.ndarray  # (B, V) induced-drag saving now (0 unless the benefit is on)

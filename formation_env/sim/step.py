@@ -51,7 +51,7 @@ from .kernels import ell_inputs, step_one
 from .kernels import position_finite as _position_finite
 from .kernels import separation_each_known as _separation_each_known
 from .kernels import step_separation as _step_separation
-from .observe import box_depth_each, observe_formation, min_separation_each, reward_formation
+from .observe import box_depth_each, observe_formation, min_separation_each, reward_formation, slot_error
 from .params import RESIDUAL, SETPOINTS, SURFACES, StepParams
 from .state import SimState, StepOutput
 
@@ -306,6 +306,12 @@ def decide_one(p, s, b, actions, o):
                       s.slot_jitter[b], s.position_demand[b], s.velocity_demand[b])
     collided = min_sep < p.reward.collision_separation_m
     crashed_any = False
+    if p.scenario.slot_along_leader_demand:  # the slot frame (the safe box and the slot error's axes)
+        chi_slot = math.atan2(s.velocity_demand[b, 0, 1], s.velocity_demand[b, 0, 0])
+    else:
+        chi_slot = math.atan2(vel[0, 1], vel[0, 0])
+    if not math.isfinite(chi_slot):
+        chi_slot = 0.0
     for a in range(nv):
         o.crashed[b, a] = status_any[a] != 0
         crashed_any = crashed_any or status_any[a] != 0
@@ -316,7 +322,7 @@ def decide_one(p, s, b, actions, o):
         dx = px - s.position_demand[b, a, 0]
         dy = py - s.position_demand[b, a, 1]
         dz = pz - s.position_demand[b, a, 2]
-        err = math.sqrt(dx * dx + dy * dy + dz * dz)
+        err = slot_error(dx, dy, dz, chi_slot, p.reward.slot_error_axes)
         if not math.isfinite(err):  # no finite position or demand known: the previous error, else 0
             err = s.previous_error[b, a] if math.isfinite(s.previous_error[b, a]) else 0.0
         o.slot_error_m[b, a] = err
@@ -343,12 +349,7 @@ def decide_one(p, s, b, actions, o):
             _ambient(p, s, b, s.step[b] * p.dt_s, amb, g3)
             formation_benefit(p, s, b, amb, o.saving[b])
     remaining = max(p.episode_steps - s.step[b], 0) / p.substeps
-    if p.scenario.slot_along_leader_demand:  # the slot frame: the safe box is drawn in it
-        chi = math.atan2(s.velocity_demand[b, 0, 1], s.velocity_demand[b, 0, 0])
-    else:
-        chi = math.atan2(vel[0, 1], vel[0, 0])
-    box_depth_each(s.aircraft[b], chi if math.isfinite(chi) else 0.0, p.reward.box_low_m, p.reward.box_high_m,
-                   o.box_depth_m[b])
+    box_depth_each(s.aircraft[b], chi_slot, p.reward.box_low_m, p.reward.box_high_m, o.box_depth_m[b])
     reward_formation(p.reward, o.slot_error_m[b], s.previous_error[b], actions, s.previous_action[b], o.saving[b],
                      o.separation_m[b], collided, o.crashed[b], remaining, o.box_depth_m[b], o.reward_terms[b])
     for a in range(nv):

@@ -17,6 +17,7 @@ from formation_env.frames import dcm_body_to_ned_from_quaternion, euler_from_qua
 
 _ERROR_CAP_M = 5000.0
 _TERMINAL_ERROR_CAP_M = 100.0
+BOX_DEPTH_CAP_SCALES = 5.0  # the compiled kernel's cap (formation_env.sim.observe), restated
 
 
 
@@ -76,12 +77,13 @@ def build_observations_reference(state, induced_ned, omega_body, ambient_ned, tu
 
 
 def reward_terms(w: RewardWeights, error, previous_error, action, previous_action, saving, separation, collided,
-                 crashed, collision_separation_m: float, span_m: float, remaining_decisions=0) -> dict:
+                 crashed, collision_separation_m: float, span_m: float, remaining_decisions=0, box_depth_m=None) -> dict:
     """Reward components (B, V) and their sum under ``"total"`` (see :class:`RewardWeights`).
 
     error, previous_error: distance from the slot now and at the previous decision (m); separation:
     distance to the nearest other UAV (m, inf alone); remaining_decisions (B,): decisions left until
-    the time limit. Non-finite inputs count as a crash: a diverged UAV is treated as 5 km from its slot.
+    the time limit; box_depth_m (B, V): distance outside the safe box (default 0: inside). Non-finite
+    inputs count as a crash: a diverged UAV is treated as 5 km from its slot.
 
     A collision or crash ends the episode, which would also end the slot costs still to come: with
     costs per decision, ending early could pay. So the terminal penalty also charges the slot cost
@@ -109,6 +111,9 @@ def reward_terms(w: RewardWeights, error, previous_error, action, previous_actio
             "collision": -(w.collision + forfeit) * collided.astype(float),
             "crash": -(w.crash + forfeit) * crashed.astype(float),
         }
+        q = np.zeros_like(err) if box_depth_m is None else np.asarray(box_depth_m, dtype=float)
+        box_scale_m = w.box_scale_b * span_m
+        terms["box"] = np.where(q > 0.0, -w.box * (1.0 + huber(np.minimum(q / box_scale_m, BOX_DEPTH_CAP_SCALES))), 0.0)
     terms["total"] = sum(terms.values())
     return terms
 

@@ -1,0 +1,146 @@
+"""``extremum_seeking``: the classical controller for formation drag minimisation, as a wake-surfing baseline.
+
+Extremum seeking (ES; Krstic and Wang 2000; for formation flight Binetti, Ariyur, Krstic and Bernelli
+2003, and the flight tests that located the energy-optimal slot from measured drag) moves the
+follower's slot set-point to maximise a measured performance index without a model of the wake:
+
+* a sinusoidal dither on the lateral and vertical set-points, at two different frequencies
+  (``a_y sin(w_y t)``, ``a_z sin(w_z t)``) so that the two gradient components separate;
+* the measured saving J (the env's ``StepOutput.saving``: the ELL induced-drag saving, an ideal,
+  noise-free measurement of exactly what the reward pays; a flight test measures it through the fuel
+  flow, with noise and lag, so this is ES's best case) is high-pass filtered (corner ``w_h``),
+  multiplied by each dither delayed by the plant's lag (``phase_lag_s``: the PID's response from
+  set-point to position), and low-pass filtered (corner ``w_l``): the gradient estimate;
+* the set-point centre climbs the gradient (``d theta / dt = gain * gradient``), held inside the
+  safe box less the dither amplitude (so that the dithered set-point never leaves the box), with the
+  integrator frozen while it is held (anti-windup).
+
+The thesis PID flies the set-point (the env's ``setpoints`` action mode, mapped onto the safe box),
+and the along-track station is held by :class:`agents.pid_formation.PIDFormation`'s speed channel
+(wind feed-forward, PD and integral on the along-track error): the along-track set-point is fixed in
+wake surfing, and the thesis tracker's proportional along-track loop alone lags 8 m per 1 m/s of
+wind. The gains were tuned on training seeds (``train/wake_surfing_eval.py --tune-es``;
+docs/wake_surfing.md has the sweep and its numbers).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, fields
+
+import numpy as np
+
+from agents.pid_formation import PIDFormation
+
+__all__ = ["ExtremumSeekingGains", "ExtremumSeeking"]
+
+
+@dataclass(frozen=True)
+class ExtremumSeekingGains:
+    """ES parameters (SI: m, s, rad/s)."""
+
+    amplitude_y_m: float = 0.15  # lateral dither amplitude
+    amplitude_z_m: float = 0.08  # vertical dither amplitude
+    period_y_s: float = 12.0  # lateral dither period
+    period_z_s: float = 9.0  # vertical dither period (not a harmonic of the lateral one)
+    # the PID's lag from set-point to position at the dither frequencies (measured step responses:
+    # 63 % in ~2.2 s laterally and ~2.3 s vertically, a first order plus ~0.8 s delay), by which the
+    # demodulating dither is delayed
+    phase_lag_y_s: float = 2.3
+    phase_lag_z_s: float = 2.1
+    highpass_rad_s: float = 0.3  # washout of the measured saving
+    lowpass_rad_s: float = 0.3  # gradient estimate filter
+    gain_y: float = 0.2  # m/s of set-point motion per (unit saving per m) of gradient (ascent)
+    gain_z: float = 0.2
+
+    def __post_init__(self) -> None:
+        for f in fields(self):
+            v = getattr(self, f.name)
+            if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v) or v < 0:
+                raise ValueError(f"ExtremumSeekingGains.{f.name} must be a finite number >= 0, got {v!r}")
+        for name in ("period_y_s", "period_z_s", "highpass_rad_s", "lowpass_rad_s"):  # divisors / filter corners
+            if getattr(self, name) <= 0:
+                raise ValueError(f"ExtremumSeekingGains.{name} must be > 0, got {getattr(self, name)!r}")
+
+
+class ExtremumSeeking:
+    """Batched, stateful: ``reset(n_rows)`` then ``act(obs (n_rows, D), saving (n_rows,)) -> (n_rows, 4)``
+    set-point actions in [-1, 1]. ``setpoint_low_m`` / ``setpoint_high_m`` (3,) are the env's set-point
+    ranges (:func:`formation_env.sim.params.setpoint_ranges`), ``speed_range_mps`` its speed range
+    (:func:`formation_env.sim.params.setpoint_speed_range`). ``centre_m`` (n_rows, 2) is the set-point
+    centre (lateral, vertical offsets from the starting slot, m) ES has converged to so far."""
+
+    action_mode = "setpoints"
+
+    def __init__(self, setpoint_low_m, setpoint_high_m, speed_range_mps: float,
+                 gains: ExtremumSeekingGains | None = None, control_hz: float = 10.0) -> None:
+        self.gains = ExtremumSeekingGains() if gains is None else gains
+        if not isinstance(self.gains, ExtremumSeekingGains):
+            raise ValueError(f"ExtremumSeeking: gains must be an ExtremumSeekingGains, got {type(gains).__name__}")
+        if isinstance(control_hz, bool) or not isinstance(control_hz, (int, float)) or not (
+                math.isfinite(control_hz) and control_hz > 0):
+            raise ValueError(f"ExtremumSeeking: control_hz must be a finite number > 0, got {control_hz!r}")
+        self.low = np.asarray(setpoint_low_m, dtype=float).reshape(3)
+        self.high = np.asarray(setpoint_high_m, dtype=float).reshape(3)
+        if np.any(self.high[1:] - self.low[1:] <= 0):
+            raise ValueError(f"ExtremumSeeking: the lateral and vertical set-point ranges must be open, got "
+                             f"{self.low} .. {self.high}")
+        self.control_hz = float(control_hz)
+        self.along = PIDFormation(control_hz=control_hz, setpoint_low_m=self.low, setpoint_high_m=self.high,
+                                  speed_range_mps=speed_range_mps)
+        self.reset(1)
+
+    def reset(self, n_rows: int) -> None:
+        if isinstance(n_rows, bool) or not isinstance(n_rows, (int, np.integer)) or n_rows < 1:
+            raise ValueError(f"ExtremumSeeking.reset: n_rows must be an integer >= 1, got {n_rows!r}")
+        n = int(n_rows)
+        self.t_s = np.zeros(n)
+        self.centre_m = np.zeros((n, 2))
+        self.washout = np.full(n, np.nan)  # the high-pass filter's low-passed saving (NaN: not started)
+        self.gradient = np.zeros((n, 2))
+        self.along.reset(n)
+
+    def reset_rows(self, rows) -> None:
+        rows = np.asarray(rows)
+        self.t_s[rows] = 0.0
+        self.centre_m[rows] = 0.0
+        self.washout[rows] = np.nan
+        self.gradient[rows] = 0.0
+        self.along.reset_rows(rows)
+
+    def _dither(self, t_s: np.ndarray) -> np.ndarray:
+        g = self.gains
+        return np.stack([g.amplitude_y_m * np.sin(2 * np.pi * t_s / g.period_y_s),
+                         g.amplitude_z_m * np.sin(2 * np.pi * t_s / g.period_z_s)], axis=1)
+
+    def act(self, obs, saving) -> np.ndarray:
+        obs = np.asarray(obs, dtype=float)
+        j = np.nan_to_num(np.asarray(saving, dtype=float).reshape(-1))
+        if obs.ndim != 2 or obs.shape[0] != j.shape[0]:
+            raise ValueError(f"ExtremumSeeking.act: obs (N, D) and saving (N,) must agree, got {obs.shape} and {j.shape}")
+        if self.t_s.shape[0] != obs.shape[0]:
+            self.reset(obs.shape[0])
+        g = self.gains
+        dt = 1.0 / self.control_hz
+        # gradient estimate from the saving just measured (the response to the dither one lag ago)
+        fresh = np.isnan(self.washout)
+        self.washout[fresh] = j[fresh]
+        self.washout += dt * g.highpass_rad_s * (j - self.washout)
+        j_hp = j - self.washout
+        lagged = np.stack([self._dither(self.t_s - g.phase_lag_y_s)[:, 0], self._dither(self.t_s - g.phase_lag_z_s)[:, 1]],
+                          axis=1)
+        amp = np.array([max(g.amplitude_y_m, 1e-9), max(g.amplitude_z_m, 1e-9)])
+        demod = j_hp[:, None] * lagged * (2.0 / amp)  # J ~ J0 + dJ/dtheta a sin: 2/a <J sin> = dJ/dtheta
+        self.gradient += dt * g.lowpass_rad_s * (demod - self.gradient)
+        # gradient ascent of the centre, held inside the range less the dither (anti-windup: clipped)
+        lo = self.low[1:] + np.array([g.amplitude_y_m, g.amplitude_z_m])
+        hi = self.high[1:] - np.array([g.amplitude_y_m, g.amplitude_z_m])
+        step = dt * np.array([g.gain_y, g.gain_z]) * self.gradient
+        self.centre_m = np.clip(self.centre_m + step, np.minimum(lo, 0.0), np.maximum(hi, 0.0))
+        self.t_s += dt
+        setpoint = self.centre_m + self._dither(self.t_s)
+        act = np.zeros((obs.shape[0], 4))
+        act[:, 1] = self.along._to_action(setpoint[:, 0], 1)
+        act[:, 2] = self.along._to_action(setpoint[:, 1], 2)
+        act[:, 3] = self.along.act(obs)[:, 3]
+        return np.clip(act, -1.0, 1.0).astype(np.float32)

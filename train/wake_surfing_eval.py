@@ -1,0 +1,268 @@
+"""Wake-surfing evaluation (issue 16): the committed policies against the thesis PID and
+``pid_formation`` at the nominal slot and the extremum seeker, on 100 held-out episodes, each measured
+against its reference optimum (:mod:`train.wake_surfing_rollout`).
+
+Statistics (95 %, percentile bootstrap over episodes, 10,000 resamples from seed 0; Wilson for rates):
+per controller the mean saving and the mean of the per-episode ratio to the reference optimum with
+intervals; time to reach 80 % of the optimum (episodes that never do count as the episode's length in
+the mean and are reported separately); collisions, episodes outside the safe box for more than 1 s,
+the smallest separation. Paired by episode: each policy (and the three training seeds averaged per
+episode) against each baseline, the gain in saving ratio (policy - baseline) and, against extremum
+seeking, the time saved to 80 % (extremum seeking - policy).
+
+``python -m train.wake_surfing_eval POLICY.zip [...] --out DIR`` (a new directory) writes
+``results.json``, ``results.md`` and, with ``--figure PATH``, the saving map with the trajectories.
+``--tune-es`` runs the extremum seeker's gain sweep on training seeds instead (docs/wake_surfing.md).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+from .config import TEST_SEED_BASE
+from .stats import N_BOOT, bootstrap_ci, paired_comparison, wilson_interval
+from .wake_surfing_rollout import es_surfer, fly, pid_formation_surfer, pid_surfer, sb3_surfer
+
+__all__ = ["evaluate_wake_surfing", "summarise_surfer", "paired_gain", "tune_es", "plot_surfing_figure", "main"]
+
+BASELINE_NAMES = ("pid", "pid_formation", "extremum_seeking")
+TUNING_SEEDS = tuple(range(1000, 1016))  # training-range seeds (never the held-out ones) for the ES sweep
+
+
+def _censored_times(eps: list[dict]) -> np.ndarray:
+    """Time to 80 % per episode, an episode that never reaches it counted as its length."""
+    return np.array([e["time_to_80_s"] if math.isfinite(e["time_to_80_s"]) else e["duration_s"] for e in eps])
+
+
+def summarise_surfer(eps: list[dict], *, n_boot: int = N_BOOT) -> dict:
+    n = len(eps)
+    col = lambda k: np.array([float(e[k]) for e in eps])  # noqa: E731
+    ratio, saving = col("saving_ratio"), col("saving")
+    times = _censored_times(eps)
+    reached = np.isfinite(col("time_to_80_s"))
+    longest = col("box_outside_longest_s")
+    collisions = int(sum(e["collision"] for e in eps))
+    return {
+        "episodes": n,
+        "saving": float(saving.mean()), "saving_ci": list(bootstrap_ci(saving, "mean", n_boot=n_boot)),
+        "reference_saving": float(col("reference_saving").mean()),
+        "saving_ratio": float(ratio.mean()), "saving_ratio_ci": list(bootstrap_ci(ratio, "mean", n_boot=n_boot)),
+        "reached_80_frac": float(reached.mean()),
+        "time_to_80_s_mean_censored": float(times.mean()),
+        "time_to_80_s_mean_censored_ci": list(bootstrap_ci(times, "mean", n_boot=n_boot)),
+        "time_to_80_s_median_censored": float(np.median(times)),
+        "collisions": collisions, "collision_rate_ci": list(wilson_interval(collisions, n)),
+        "crashes": int(sum(e["crashed"] for e in eps)),
+        "box_outside_over_1s": int(np.sum(longest > 1.0)),
+        "box_outside_longest_s_worst": float(longest.max()),
+        "box_outside_frac": float(col("box_outside_frac").mean()),
+        "min_separation_m": float(col("min_separation_m").min()),
+    }
+
+
+def paired_gain(baseline, candidate, *, higher_is_better: bool = True, n_boot: int = N_BOOT) -> dict:
+    """Per-episode gain of the candidate over the baseline (candidate - baseline when higher is better,
+    baseline - candidate otherwise) with bootstrap intervals, episodes better / worse and the sign test
+    (:func:`train.stats.paired_comparison`)."""
+    if higher_is_better:
+        r = paired_comparison(candidate, baseline, n_boot=n_boot, lower_is_better=True)
+    else:
+        r = paired_comparison(baseline, candidate, n_boot=n_boot, lower_is_better=True)
+    return {"n": r["n"], "baseline_mean": r["candidate_mean"] if higher_is_better else r["baseline_mean"],
+            "candidate_mean": r["baseline_mean"] if higher_is_better else r["candidate_mean"],
+            "mean_gain": r["mean_reduction"], "mean_gain_ci": list(r["mean_reduction_ci"]),
+            "median_gain": r["median_reduction"], "median_gain_ci": list(r["median_reduction_ci"]),
+            "n_better": r["n_worse"] if higher_is_better else r["n_better"],
+            "n_worse": r["n_better"] if higher_is_better else r["n_worse"], "sign_test_p": r["sign_test_p"]}
+
+
+def _per_episode(eps: list[dict]) -> dict:
+    return {"saving_ratio": np.array([e["saving_ratio"] for e in eps]), "time_to_80_s": _censored_times(eps)}
+
+
+def _compare(cand: dict, base: dict, base_name: str, n_boot: int) -> dict:
+    out = {"saving_ratio": paired_gain(base["saving_ratio"], cand["saving_ratio"], n_boot=n_boot)}
+    if base_name == "extremum_seeking":
+        out["time_to_80_s"] = paired_gain(base["time_to_80_s"], cand["time_to_80_s"], higher_is_better=False,
+                                          n_boot=n_boot)
+    return out
+
+
+def evaluate_wake_surfing(policies, *, episodes: int = 100, seeds=None, es_gains=None, n_boot: int = N_BOOT,
+                          log=print) -> dict:
+    """Every policy (SB3 zips) and the three baselines on the same held-out episodes; the report."""
+    seeds = list(seeds) if seeds is not None else [TEST_SEED_BASE + i for i in range(episodes)]
+    surfers = [pid_surfer(), pid_formation_surfer(), es_surfer(es_gains)]
+    names = []
+    for p in policies:
+        s = sb3_surfer(str(p))
+        if s.name in names or s.name in BASELINE_NAMES:
+            raise ValueError(f"two policies named {s.name!r}")
+        names.append(s.name)
+        surfers.append(s)
+    episodes_by = {}
+    for s in surfers:
+        t0 = time.perf_counter()
+        episodes_by[s.name] = fly(s, seeds, keep_series=False)
+        summ = summarise_surfer(episodes_by[s.name], n_boot=n_boot)
+        log(f"{s.name}: saving {summ['saving']:.4f}, ratio to optimum {summ['saving_ratio']:.3f} "
+            f"[{summ['saving_ratio_ci'][0]:.3f}, {summ['saving_ratio_ci'][1]:.3f}], reached 80 % in "
+            f"{summ['reached_80_frac']:.2f} of episodes, >1 s outside the box {summ['box_outside_over_1s']}, "
+            f"collisions {summ['collisions']} ({time.perf_counter() - t0:.0f} s)")
+    report = {"seeds": seeds, "controllers": {n: {"summary": summarise_surfer(e, n_boot=n_boot), "episodes": e}
+                                              for n, e in episodes_by.items()}}
+    per = {n: _per_episode(e) for n, e in episodes_by.items()}
+    comps = {}
+    for n in names:
+        comps[n] = {b: _compare(per[n], per[b], b, n_boot) for b in BASELINE_NAMES}
+    comps["extremum_seeking"] = {b: _compare(per["extremum_seeking"], per[b], b, n_boot) for b in ("pid", "pid_formation")}
+    if len(names) >= 2:
+        group = {k: np.mean([per[n][k] for n in names], axis=0) for k in ("saving_ratio", "time_to_80_s")}
+        comps["policy_seed_mean"] = {b: _compare(group, per[b], b, n_boot) for b in BASELINE_NAMES}
+        report["seed_spread"] = {k: {"mean": float(np.mean(v)), "std": float(np.std(v, ddof=1)), "min": float(np.min(v)),
+                                     "max": float(np.max(v))}
+                                 for k, v in {m: [report["controllers"][n]["summary"][m] for n in names]
+                                              for m in ("saving", "saving_ratio", "time_to_80_s_mean_censored")}.items()}
+    report["comparisons"] = comps
+    report["markdown"] = markdown(report)
+    return report
+
+
+def markdown(report: dict) -> str:
+    rows = ["| controller | saving | ratio to optimum [95 % CI] | reached 80 % | time to 80 % (s, censored mean [CI]; median) "
+            "| >1 s outside box | collisions | min separation (m) |", "|---|---|---|---|---|---|---|---|"]
+    for n, r in report["controllers"].items():
+        s = r["summary"]
+        rows.append(f"| {n} | {s['saving']:.4f} | {s['saving_ratio']:.3f} [{s['saving_ratio_ci'][0]:.3f}, "
+                    f"{s['saving_ratio_ci'][1]:.3f}] | {100 * s['reached_80_frac']:.0f} % | "
+                    f"{s['time_to_80_s_mean_censored']:.1f} [{s['time_to_80_s_mean_censored_ci'][0]:.1f}, "
+                    f"{s['time_to_80_s_mean_censored_ci'][1]:.1f}]; {s['time_to_80_s_median_censored']:.1f} | "
+                    f"{s['box_outside_over_1s']} (worst {s['box_outside_longest_s_worst']:.1f} s) | {s['collisions']} | "
+                    f"{s['min_separation_m']:.2f} |")
+    rows += ["", "| candidate | baseline | ratio gain [95 % CI] | better / worse | time saved to 80 % (s) [95 % CI] |",
+             "|---|---|---|---|---|"]
+    for n, comps in report["comparisons"].items():
+        for b, c in comps.items():
+            g = c["saving_ratio"]
+            t = c.get("time_to_80_s")
+            rows.append(f"| {n} | {b} | {g['mean_gain']:+.3f} [{g['mean_gain_ci'][0]:+.3f}, {g['mean_gain_ci'][1]:+.3f}] | "
+                        f"{g['n_better']} / {g['n_worse']} | "
+                        + (f"{t['mean_gain']:+.1f} [{t['mean_gain_ci'][0]:+.1f}, {t['mean_gain_ci'][1]:+.1f}]" if t else "") + " |")
+    return "\n".join(rows) + "\n"
+
+
+def tune_es(grid: dict[str, list[float]], *, seeds=TUNING_SEEDS, log=print) -> list[dict]:
+    """The extremum seeker's sweep: every combination of ``grid`` (ExtremumSeekingGains fields) on the
+    training-range ``seeds``; the mean saving ratio of each, best first."""
+    import itertools
+
+    from agents.extremum_seeking import ExtremumSeekingGains
+
+    keys = list(grid)
+    out = []
+    for values in itertools.product(*(grid[k] for k in keys)):
+        gains = ExtremumSeekingGains(**dict(zip(keys, values)))
+        eps = fly(es_surfer(gains), seeds)
+        s = summarise_surfer(eps, n_boot=200)
+        row = {**dict(zip(keys, values)), "saving_ratio": s["saving_ratio"], "reached_80_frac": s["reached_80_frac"],
+               "time_to_80_s_mean_censored": s["time_to_80_s_mean_censored"], "box_outside_over_1s": s["box_outside_over_1s"]}
+        log(json.dumps(row))
+        out.append(row)
+    return sorted(out, key=lambda r: -r["saving_ratio"])
+
+
+def plot_surfing_figure(path, policy_zip: str, *, es_gains=None, crosswind_mps: float = 4.0, seed: int = TEST_SEED_BASE,
+                        overwrite: bool = False) -> Path:
+    """Two panels: the follower's saving over the safe box (x = -2 spans) in calm air and in a steady
+    crosswind, with the reference optimum and the paths of the policy and the extremum seeker flying
+    a demonstration episode (no turbulence, no manoeuvre) from the nominal slot."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from formation_env.envs.config import Randomisation
+    from formation_env.io import save_figure
+    from formation_env.scenarios import get_scenario
+    from formation_env.verification.wake_surfing import reference_optimum, saving_in_crosswind
+
+    from .eval_episodes import eval_env_config
+
+    box = np.asarray(get_scenario("wake_surfing").safe_box_b)
+    cfg = eval_env_config("wake_surfing", "setpoints")
+    import dataclasses
+
+    cfg = dataclasses.replace(cfg, randomisation=Randomisation())
+    y = np.linspace(box[1, 0], box[1, 1], 61)
+    z = np.linspace(box[2, 0], box[2, 1], 36)
+    fig, axes = plt.subplots(1, 2, figsize=(11, 4.2), sharey=True, constrained_layout=True)
+    for ax, wind in zip(axes, (0.0, crosswind_mps)):
+        crab = math.asin(wind / 25.0)
+        yy, zz = np.meshgrid(y, z, indexing="ij")
+        grid = np.stack([np.full_like(yy, -2.0), yy, zz], axis=-1)
+        sav = saving_in_crosswind(grid, crab)
+        cs = ax.contourf(yy, zz, sav, levels=np.linspace(-0.1, 0.45, 23), cmap="viridis", extend="both")
+        oy, oz, osav = reference_optimum(crab)
+        ax.plot(float(oy), float(oz), marker="*", ms=16, color="white", mec="k", label=f"reference optimum ({float(osav):.3f})")
+        ax.plot(1.0, 0.3, marker="s", ms=8, color="tab:red", mec="k", label="nominal slot (thesis PID)")
+        for surfer, colour in ((sb3_surfer(policy_zip, "policy"), "tab:orange"), (es_surfer(es_gains), "white")):
+            ep = fly(surfer, [seed], config=cfg, keep_series=True, crosswind_mps=wind)[0]
+            ax.plot(ep["series"]["lateral_b"], ep["series"]["vertical_b"], color=colour, lw=1.2,
+                    label=f"{'PPO policy' if surfer.name == 'policy' else 'extremum seeking'} (mean saving {ep['saving']:.3f})")
+        ax.add_patch(plt.Rectangle((box[1, 0], box[2, 0]), box[1, 1] - box[1, 0], box[2, 1] - box[2, 0], fill=False,
+                                   ec="k", lw=1.5, ls="--"))
+        ax.set_xlim(box[1, 0] - 0.05, box[1, 1] + 0.05)
+        ax.set_ylim(box[2, 1] + 0.05, box[2, 0] - 0.05)  # z down: the leader's wake plane at the top
+        ax.set_xlabel("follower starboard of the leader (spans)")
+        ax.set_title(f"crosswind {wind:g} m/s (crab {math.degrees(crab):.1f} deg), 2 spans behind")
+        ax.legend(loc="lower right", fontsize=7)
+    axes[0].set_ylabel("follower below the leader (spans)")
+    fig.colorbar(cs, ax=axes, label="follower induced-drag saving")
+    out = save_figure(fig, path, overwrite=overwrite, dpi=110)
+    plt.close(fig)
+    return out
+
+
+def main(argv=None) -> int:
+    p = argparse.ArgumentParser(prog="python -m train.wake_surfing_eval", description=__doc__.split("\n\n")[0])
+    p.add_argument("policies", nargs="*", help="SB3 zips (name them <group>_seed<k>.zip)")
+    p.add_argument("--episodes", type=int, default=100)
+    p.add_argument("--out", help="a new directory for results.json / results.md")
+    p.add_argument("--figure", help="write the saving-map figure here (needs a policy)")
+    p.add_argument("--overwrite", action="store_true")
+    p.add_argument("--tune-es", action="store_true", help="run the extremum seeker's gain sweep on training seeds")
+    a = p.parse_args(argv)
+    if a.tune_es:
+        rows = tune_es({"gain_y": [0.3, 1.0], "gain_z": [0.5, 1.0, 2.0], "amplitude_y_m": [0.1, 0.2],
+                        "amplitude_z_m": [0.06, 0.12]})
+        print(json.dumps(rows[:5], indent=1))
+        return 0
+    if a.episodes < 1:
+        print(f"error: --episodes must be >= 1, got {a.episodes}", file=sys.stderr)
+        return 2
+    out = None
+    if a.out:
+        from formation_env.io import prepare_output_dir
+
+        out = prepare_output_dir(a.out, overwrite=a.overwrite)
+    report = evaluate_wake_surfing(a.policies, episodes=a.episodes)
+    if out is not None:
+        from formation_env.io import atomic_write_json, atomic_write_text
+
+        atomic_write_json(out / "results.json", json.loads(json.dumps(report, default=float)), overwrite=a.overwrite)
+        atomic_write_text(out / "results.md", "# Wake surfing: held-out evaluation\n\n" + report["markdown"], overwrite=a.overwrite)
+    print(report["markdown"])
+    if a.figure and a.policies:
+        print(plot_surfing_figure(a.figure, a.policies[0], overwrite=a.overwrite))
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
