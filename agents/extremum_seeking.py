@@ -12,8 +12,8 @@ follower's slot set-point to maximise a measured performance index without a mod
   multiplied by each dither delayed by the plant's lag (``phase_lag_s``: the PID's response from
   set-point to position), and low-pass filtered (corner ``w_l``): the gradient estimate;
 * the set-point centre climbs the gradient (``d theta / dt = gain * gradient``), held inside the
-  safe box less the dither amplitude (so that the dithered set-point never leaves the box), with the
-  integrator frozen while it is held (anti-windup).
+  safe box less the dither amplitude and a margin (so that the dithered set-point, and the aircraft
+  tracking it in turbulence, stay in the box), clipped there (anti-windup).
 
 The thesis PID flies the set-point (the env's ``setpoints`` action mode, mapped onto the safe box),
 and the along-track station is held by :class:`agents.pid_formation.PIDFormation`'s speed channel
@@ -37,10 +37,11 @@ __all__ = ["ExtremumSeekingGains", "ExtremumSeeking"]
 
 @dataclass(frozen=True)
 class ExtremumSeekingGains:
-    """ES parameters (SI: m, s, rad/s)."""
+    """ES parameters (SI: m, s, rad/s). The defaults are the sweep's best on 16 training-range episodes
+    (``python -m train.wake_surfing_eval --tune-es``; docs/wake_surfing.md)."""
 
-    amplitude_y_m: float = 0.15  # lateral dither amplitude
-    amplitude_z_m: float = 0.08  # vertical dither amplitude
+    amplitude_y_m: float = 0.35  # lateral dither amplitude
+    amplitude_z_m: float = 0.12  # vertical dither amplitude
     period_y_s: float = 12.0  # lateral dither period
     period_z_s: float = 9.0  # vertical dither period (not a harmonic of the lateral one)
     # the PID's lag from set-point to position at the dither frequencies (measured step responses:
@@ -50,8 +51,19 @@ class ExtremumSeekingGains:
     phase_lag_z_s: float = 2.1
     highpass_rad_s: float = 0.3  # washout of the measured saving
     lowpass_rad_s: float = 0.3  # gradient estimate filter
-    gain_y: float = 0.2  # m/s of set-point motion per (unit saving per m) of gradient (ascent)
-    gain_z: float = 0.2
+    gain_y: float = 0.5  # m/s of set-point motion per (unit saving per m) of gradient (ascent)
+    gain_z: float = 0.25
+    # the centre keeps this far inside the box's walls (beyond the dither): the optimum lies on the
+    # box's floor, and the PID's tracking error under turbulence would carry a follower dithering on
+    # the floor out of the box
+    margin_m: float = 0.15
+    # the inner loops around the ES set-point (pid_formation's cross-track and vertical laws, on the
+    # error from the set-point instead of the slot): they raise the PID's position-loop gains, so the
+    # aircraft follows the dither and stays near the set-point in turbulence; 0 leaves the PID alone
+    kp_y: float = 0.0  # m of set-point displacement per m of lateral error (on: worse, see the sweep)
+    ki_y: float = 0.0  # m per m s
+    kp_z: float = 3.0
+    ki_z: float = 0.5
 
     def __post_init__(self) -> None:
         for f in fields(self):
@@ -98,6 +110,7 @@ class ExtremumSeeking:
         self.centre_m = np.zeros((n, 2))
         self.washout = np.full(n, np.nan)  # the high-pass filter's low-passed saving (NaN: not started)
         self.gradient = np.zeros((n, 2))
+        self.integral = np.zeros((n, 2))
         self.along.reset(n)
 
     def reset_rows(self, rows) -> None:
@@ -106,6 +119,7 @@ class ExtremumSeeking:
         self.centre_m[rows] = 0.0
         self.washout[rows] = np.nan
         self.gradient[rows] = 0.0
+        self.integral[rows] = 0.0
         self.along.reset_rows(rows)
 
     def _dither(self, t_s: np.ndarray) -> np.ndarray:
@@ -133,14 +147,29 @@ class ExtremumSeeking:
         demod = j_hp[:, None] * lagged * (2.0 / amp)  # J ~ J0 + dJ/dtheta a sin: 2/a <J sin> = dJ/dtheta
         self.gradient += dt * g.lowpass_rad_s * (demod - self.gradient)
         # gradient ascent of the centre, held inside the range less the dither (anti-windup: clipped)
-        lo = self.low[1:] + np.array([g.amplitude_y_m, g.amplitude_z_m])
-        hi = self.high[1:] - np.array([g.amplitude_y_m, g.amplitude_z_m])
+        lo = self.low[1:] + np.array([g.amplitude_y_m, g.amplitude_z_m]) + g.margin_m
+        hi = self.high[1:] - np.array([g.amplitude_y_m, g.amplitude_z_m]) - g.margin_m
         step = dt * np.array([g.gain_y, g.gain_z]) * self.gradient
         self.centre_m = np.clip(self.centre_m + step, np.minimum(lo, 0.0), np.maximum(hi, 0.0))
         self.t_s += dt
         setpoint = self.centre_m + self._dither(self.t_s)
+        # inner loops: displace the demand against the error from the set-point (PI, conditional
+        # integration: the integral stops while its output is saturated)
+        err = self._slot_error_m(obs)[:, 1:3] - setpoint
+        kp, ki = np.array([g.kp_y, g.kp_z]), np.array([g.ki_y, g.ki_z])
+        demand = setpoint - kp * err - ki * self.integral
         act = np.zeros((obs.shape[0], 4))
-        act[:, 1] = self.along._to_action(setpoint[:, 0], 1)
-        act[:, 2] = self.along._to_action(setpoint[:, 1], 2)
+        act[:, 1] = self.along._to_action(demand[:, 0], 1)
+        act[:, 2] = self.along._to_action(demand[:, 1], 2)
+        free = np.abs(act[:, 1:3]) < 1.0
+        self.integral += np.where(free | (np.sign(act[:, 1:3]) * err > 0), err * dt, 0.0)
         act[:, 3] = self.along.act(obs)[:, 3]
         return np.clip(act, -1.0, 1.0).astype(np.float32)
+
+    @staticmethod
+    def _slot_error_m(obs: np.ndarray) -> np.ndarray:
+        """(N, 3) position minus the nominal slot demand, m, slot frame (from the observation)."""
+        from agents.pid_formation import inverse_slog
+        from formation_env.envs.observations import POSITION_SCALE_M
+
+        return inverse_slog(obs[:, 10:13], POSITION_SCALE_M)

@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
-# The exact commands behind the committed policies in train/policies/ (issue 13): PPO, setpoints actions,
-# frozen Dryden turbulence sigma 1 m/s, wake on, 3 training seeds per task, run two at a time on the
+# The exact commands behind the committed policies in train/policies/ (issues 13 and 16): PPO, setpoints actions,
+# frozen Dryden turbulence sigma 1 m/s (wake_surfing: its task preset, train/hyperparams/ppo.yml), wake on, 3 training seeds per task, run two at a time on the
 # 2-core machine (one core each: NUMBA_NUM_THREADS=1, torch on 1 thread), then published with their
 # curves and validation history. Usage: bash train/committed_runs.sh [RUNS_DIR]
 set -euo pipefail
@@ -15,6 +15,7 @@ jobs_list() {
     echo "formation_keeping 1200000 $seed"
     echo "close_formation 1200000 $seed"
     echo "reconfiguration 2500000 $seed"
+    echo "wake_surfing 2000000 $seed"
   done
 }
 # ONLY="scenario:seed scenario:seed ..." runs a subset (e.g. to redo one run)
@@ -37,7 +38,7 @@ export RUNS FE
 jobs_list | selected | xargs -P 2 -L 1 bash -c 'run_one "$0" "$1" "$2"'
 [ -n "${NO_PUBLISH:-}" ] && exit 0
 
-for scenario in formation_keeping close_formation reconfiguration; do
+for scenario in formation_keeping close_formation reconfiguration wake_surfing; do
   for seed in 0 1 2; do
     run="$RUNS/${scenario}_seed${seed}"
     wall=$("$PY" -c "import json,sys; print(json.load(open(sys.argv[1]))['wall_s'])" "$run/summary.json")

@@ -34,7 +34,8 @@ __all__ = ["evaluate_wake_surfing", "summarise_surfer", "paired_gain", "tune_es"
 
 BASELINE_NAMES = ("pid", "pid_formation", "extremum_seeking")
 TUNING_SEEDS = tuple(range(1000, 1016))  # training-range seeds (never the held-out ones) for the ES sweep
-ES_GRID = {"gain_y": [0.5, 1.0, 2.0, 4.0], "gain_z": [0.5, 1.0, 2.0], "amplitude_y_m": [0.1, 0.2], "amplitude_z_m": [0.06, 0.12]}
+ES_GRID = {"gain_y": [0.25, 0.5, 1.0], "gain_z": [0.1, 0.25, 0.5], "amplitude_y_m": [0.2, 0.35], "amplitude_z_m": [0.12],
+           "margin_m": [0.15], "kp_z": [3.0], "ki_z": [0.5]}
 
 
 def _censored_times(eps: list[dict]) -> np.ndarray:
@@ -80,8 +81,7 @@ def paired_gain(baseline, candidate, *, higher_is_better: bool = True, n_boot: i
             "candidate_mean": r["baseline_mean"] if higher_is_better else r["candidate_mean"],
             "mean_gain": r["mean_reduction"], "mean_gain_ci": list(r["mean_reduction_ci"]),
             "median_gain": r["median_reduction"], "median_gain_ci": list(r["median_reduction_ci"]),
-            "n_better": r["n_worse"] if higher_is_better else r["n_better"],
-            "n_worse": r["n_better"] if higher_is_better else r["n_worse"], "sign_test_p": r["sign_test_p"]}
+            "n_better": r["n_better"], "n_worse": r["n_worse"], "sign_test_p": r["sign_test_p"]}
 
 
 def _per_episode(eps: list[dict]) -> dict:
