@@ -23,21 +23,38 @@ def _agent(**gains):
 
 
 def test_converges_on_the_optimum_in_calm_air():
-    """No wind, no turbulence, no manoeuvre: from the thesis slot (saving ~0.15) the seeker climbs to
-    the reference optimum (0.3645 at y 0.963 b on the box's 0.1 b floor) less what its dither and
-    margin cost: over the last 30 s of 120 it saves at least 75 % of the optimum, its centre has moved
-    up by more than 0.1 span and stays within 0.15 span of the optimum laterally."""
-    cfg = make_config(scenario="wake_surfing", learning="followers", randomisation=Randomisation(), duration_s=120.0)
+    """No wind, no turbulence, no manoeuvre: from the thesis slot (saving ~0.15) the seeker climbs to the
+    best point it may hold. The optimum sits on the box's 0.1 b floor; the seeker's centre may come no
+    closer than the floor plus its dither amplitude and margin (so that it stays in the box), so its
+    target is the constrained optimum on that line: within 120 s its vertical centre reaches the limit,
+    and over the last 60 s of 180 its mean centre has a static saving (ELL map) within 3 % of the best
+    on that line, laterally within 0.1 span of the optimum, never leaving the box."""
+    from formation_env.verification.close_formation_map import slot_savings
+
+    cfg = make_config(scenario="wake_surfing", learning="followers", randomisation=Randomisation(), duration_s=180.0)
     agent = _agent()
-    ep = fly(Surfer("es", agent.act, agent.reset), [5], config=cfg, keep_series=True)[0]
-    y_opt, z_opt, s_opt = reference_optimum(0.0)
+    centres = []
+
+    def act(obs, saving):
+        a = agent.act(obs, saving)
+        centres.append(agent.centre_m[0] / B + np.asarray(SC.slots[0].keyframes[0][1])[1:])
+        return a
+
+    ep = fly(Surfer("es", act, agent.reset), [5], config=cfg, keep_series=True)[0]
+    centres = np.asarray(centres)
+    g = agent.gains
+    z_limit = SC.safe_box_b[2][0] + (g.amplitude_z_m + g.margin_m) / B
+    y_opt, _, s_opt = reference_optimum(0.0)
     saving = np.asarray(ep["series"]["saving"])
     assert saving[:50].mean() < 0.5 * s_opt  # it starts far from the optimum
-    assert saving[-300:].mean() > 0.75 * s_opt
-    centre_b = agent.centre_m[0] / B + np.asarray(SC.slots[0].keyframes[0][1])[1:]
-    assert centre_b[1] < 0.3 - 0.1
-    assert abs(centre_b[0] - y_opt) < 0.15
-    assert not ep["collision"] and ep["box_outside_longest_s"] <= 1.0
+    assert np.all(centres[1200:, 1] < z_limit + 0.005)  # at the floor limit from 120 s on
+    y_line = np.linspace(0.7, 1.3, 61)
+    line = slot_savings(np.stack([np.full(61, -2.0), y_line, np.full(61, z_limit)], -1))[:, 1]
+    mean_centre = centres[-600:].mean(axis=0)
+    at_centre = slot_savings(np.array([-2.0, *mean_centre]))[1]
+    assert at_centre > 0.97 * line.max()
+    assert abs(mean_centre[0] - y_opt) < 0.1
+    assert not ep["collision"] and ep["box_outside_frac"] == 0.0
 
 
 def test_gradient_estimate_points_uphill():
