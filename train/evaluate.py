@@ -75,7 +75,7 @@ TEST_EPISODES = 100                    # held-out test episodes per policy by de
 
 
 def evaluate(policies: Sequence[str], *, scenario: str, episodes: int = TEST_EPISODES, seeds: Sequence[int] | None = None,
-             turbulence_sigma_mps: float = 1.0, wake: bool = True, compute_benefit: bool = False,
+             turbulence_sigma_mps: float | None = None, wake: bool = True, compute_benefit: bool = False,
              action_mode: str | None = None, out_dir: str | Path | None = None, overwrite: bool = False,
              plots: bool = True, duration_s: float | None = None, groups: dict[str, Sequence[str]] | None = None,
              turbulence_field: str = "frozen",
@@ -100,6 +100,8 @@ def evaluate(policies: Sequence[str], *, scenario: str, episodes: int = TEST_EPI
     if duration_s is not None and not (isinstance(duration_s, (int, float)) and math.isfinite(duration_s)
                                        and 0 < duration_s <= MAX_DURATION_S):
         raise ValueError(f"duration must be a number of seconds in (0, {MAX_DURATION_S:g}], got {duration_s!r}")
+    if turbulence_sigma_mps is None:  # the test set's level: 1 m/s, or a task preset's own (wake_surfing)
+        turbulence_sigma_mps = eval_env_config(scenario, "setpoints").randomisation.turbulence_sigma_mps
     if not (isinstance(turbulence_sigma_mps, (int, float)) and math.isfinite(turbulence_sigma_mps) and turbulence_sigma_mps >= 0):
         raise ValueError(f"turbulence sigma must be a finite number >= 0, got {turbulence_sigma_mps!r}")
     if seeds is None or len(seeds) == 0:

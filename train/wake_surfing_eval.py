@@ -18,6 +18,7 @@ seeking, the time saved to 80 % (extremum seeking - policy).
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import json
 import math
 import sys
@@ -28,7 +29,7 @@ import numpy as np
 
 from .config import TEST_SEED_BASE
 from .stats import N_BOOT, bootstrap_ci, paired_comparison, wilson_interval
-from .wake_surfing_rollout import es_surfer, fly, pid_formation_surfer, pid_surfer, sb3_surfer
+from .wake_surfing_rollout import es_surfer, fly, oracle_surfer, pid_formation_surfer, pid_surfer, sb3_surfer
 
 __all__ = ["evaluate_wake_surfing", "summarise_surfer", "paired_gain", "tune_es", "plot_surfing_figure", "main"]
 
@@ -97,8 +98,14 @@ def _compare(cand: dict, base: dict, base_name: str, n_boot: int) -> dict:
 
 
 def evaluate_wake_surfing(policies, *, episodes: int = 100, seeds=None, es_gains=None, n_boot: int = N_BOOT,
-                          log=print) -> dict:
-    """Every policy (SB3 zips) and the three baselines on the same held-out episodes; the report."""
+                          turbulence_sigma_mps: float | None = None, oracle_margins_b=(), log=print) -> dict:
+    """Every policy (SB3 zips) and the three baselines on the same held-out episodes; the report.
+    ``turbulence_sigma_mps`` replaces the task's Dryden level (None: the task's); ``oracle_margins_b``
+    adds the oracle set-point ceilings (:func:`train.wake_surfing_rollout.oracle_surfer`), reported
+    beside the controllers but compared with none."""
+    from .eval_episodes import eval_env_config
+
+    config = eval_env_config("wake_surfing", "setpoints", turbulence_sigma_mps=turbulence_sigma_mps)
     seeds = list(seeds) if seeds is not None else [TEST_SEED_BASE + i for i in range(episodes)]
     surfers = [pid_surfer(), pid_formation_surfer(), es_surfer(es_gains)]
     names = []
@@ -108,22 +115,25 @@ def evaluate_wake_surfing(policies, *, episodes: int = 100, seeds=None, es_gains
             raise ValueError(f"two policies named {s.name!r}")
         names.append(s.name)
         surfers.append(s)
+    surfers += [oracle_surfer(float(m)) for m in oracle_margins_b]
     episodes_by = {}
     for s in surfers:
         t0 = time.perf_counter()
-        episodes_by[s.name] = fly(s, seeds, keep_series=False)
+        episodes_by[s.name] = fly(s, seeds, config=config, keep_series=False)
         summ = summarise_surfer(episodes_by[s.name], n_boot=n_boot)
         log(f"{s.name}: saving {summ['saving']:.4f}, ratio to optimum {summ['saving_ratio']:.3f} "
             f"[{summ['saving_ratio_ci'][0]:.3f}, {summ['saving_ratio_ci'][1]:.3f}], reached 80 % in "
             f"{summ['reached_80_frac']:.2f} of episodes, >1 s outside the box {summ['box_outside_over_1s']}, "
             f"collisions {summ['collisions']} ({time.perf_counter() - t0:.0f} s)")
-    report = {"seeds": seeds, "controllers": {n: {"summary": summarise_surfer(e, n_boot=n_boot), "episodes": e}
+    report = {"seeds": seeds, "turbulence_sigma_mps": config.randomisation.turbulence_sigma_mps,
+              "randomisation": dataclasses.asdict(config.randomisation), "controllers": {n: {"summary": summarise_surfer(e, n_boot=n_boot), "episodes": e}
                                               for n, e in episodes_by.items()}}
     per = {n: _per_episode(e) for n, e in episodes_by.items()}
     comps = {}
     for n in names:
         comps[n] = {b: _compare(per[n], per[b], b, n_boot) for b in BASELINE_NAMES}
     comps["extremum_seeking"] = {b: _compare(per["extremum_seeking"], per[b], b, n_boot) for b in ("pid", "pid_formation")}
+    # (the oracle ceilings are summarised, not compared: they know the wind)
     if len(names) >= 2:
         group = {k: np.mean([per[n][k] for n in names], axis=0) for k in ("saving_ratio", "time_to_80_s")}
         comps["policy_seed_mean"] = {b: _compare(group, per[b], b, n_boot) for b in BASELINE_NAMES}
@@ -213,7 +223,7 @@ def plot_surfing_figure(path, policy_zip: str, *, es_gains=None, crosswind_mps: 
         oy, oz, osav = reference_optimum(crab)
         ax.plot(float(oy), float(oz), marker="*", ms=16, color="white", mec="k", label=f"reference optimum ({float(osav):.3f})")
         ax.plot(1.0, 0.3, marker="s", ms=8, color="tab:red", mec="k", label="nominal slot (thesis PID)")
-        for surfer, colour in ((sb3_surfer(policy_zip, "policy"), "tab:orange"), (es_surfer(es_gains), "white")):
+        for surfer, colour in ((sb3_surfer(policy_zip, "policy"), "tab:orange"), (es_surfer(es_gains), "magenta")):
             ep = fly(surfer, [seed], config=cfg, keep_series=True, crosswind_mps=wind)[0]
             ax.plot(ep["series"]["lateral_b"], ep["series"]["vertical_b"], color=colour, lw=1.2,
                     label=f"{'PPO policy' if surfer.name == 'policy' else 'extremum seeking'} (mean saving {ep['saving']:.3f})")
@@ -231,6 +241,17 @@ def plot_surfing_figure(path, policy_zip: str, *, es_gains=None, crosswind_mps: 
     return out
 
 
+def _rounded(x, digits: int = 5):
+    """Floats rounded to ``digits`` decimals throughout (the committed JSON stays small)."""
+    if isinstance(x, float):
+        return round(x, digits)
+    if isinstance(x, dict):
+        return {k: _rounded(v, digits) for k, v in x.items()}
+    if isinstance(x, list):
+        return [_rounded(v, digits) for v in x]
+    return x
+
+
 def main(argv=None) -> int:
     p = argparse.ArgumentParser(prog="python -m train.wake_surfing_eval", description=__doc__.split("\n\n")[0])
     p.add_argument("policies", nargs="*", help="SB3 zips (name them <group>_seed<k>.zip)")
@@ -239,6 +260,9 @@ def main(argv=None) -> int:
     p.add_argument("--figure", help="write the saving-map figure here (needs a policy)")
     p.add_argument("--overwrite", action="store_true")
     p.add_argument("--tune-es", action="store_true", help="run the extremum seeker's gain sweep on training seeds")
+    p.add_argument("--turbulence", type=float, default=None, help="Dryden sigma, m/s (default: the task's 0.25)")
+    p.add_argument("--oracle-margins", type=float, nargs="*", default=[0.05, 0.1],
+                   help="oracle set-point ceilings to add, spans below the reference optimum")
     a = p.parse_args(argv)
     if a.tune_es:
         rows = tune_es(ES_GRID)
@@ -247,17 +271,32 @@ def main(argv=None) -> int:
     if a.episodes < 1:
         print(f"error: --episodes must be >= 1, got {a.episodes}", file=sys.stderr)
         return 2
+    if a.turbulence is not None and not (math.isfinite(a.turbulence) and a.turbulence >= 0):
+        print(f"error: --turbulence must be a finite number >= 0, got {a.turbulence}", file=sys.stderr)
+        return 2
+    missing = [p for p in a.policies if not Path(p).is_file()]
+    if missing:
+        print(f"error: policy file {missing[0]!r} does not exist", file=sys.stderr)
+        return 2
     out = None
     if a.out:
         from formation_env.io import prepare_output_dir
 
         out = prepare_output_dir(a.out, overwrite=a.overwrite)
-    report = evaluate_wake_surfing(a.policies, episodes=a.episodes)
+    report = evaluate_wake_surfing(a.policies, episodes=a.episodes, turbulence_sigma_mps=a.turbulence,
+                                   oracle_margins_b=a.oracle_margins)
     if out is not None:
         from formation_env.io import atomic_write_json, atomic_write_text
 
-        atomic_write_json(out / "results.json", json.loads(json.dumps(report, default=float)), overwrite=a.overwrite)
-        atomic_write_text(out / "results.md", "# Wake surfing: held-out evaluation\n\n" + report["markdown"], overwrite=a.overwrite)
+        atomic_write_json(out / "results.json", _rounded(json.loads(json.dumps(report, default=float))), overwrite=a.overwrite)
+        r = report["randomisation"]
+        head = (f"# Wake surfing: held-out evaluation\n\n{len(report['seeds'])} episodes (seeds {report['seeds'][0]}.."
+                f"{report['seeds'][-1]}, never used in training or model selection): crosswind +-{r['crosswind_mps']:g} m/s, "
+                f"leader turn +-{r['leader_turn_deg']:g} deg and speed change +-{r['leader_speed_mps']:g} m/s, frozen Dryden "
+                f"sigma {r['turbulence_sigma_mps']:g} m/s, wake on. Saving counted as 0 outside the safe box; ratio = per-episode "
+                "saving / reference optimum's; intervals 95 % percentile bootstrap over episodes (10,000 resamples, "
+                "seed 0), Wilson for rates. Oracle rows know the wind (a ceiling, not a controller).\n\n")
+        atomic_write_text(out / "results.md", head + report["markdown"], overwrite=a.overwrite)
     print(report["markdown"])
     if a.figure and a.policies:
         print(plot_surfing_figure(a.figure, a.policies[0], overwrite=a.overwrite))

@@ -42,7 +42,8 @@ def register(sub) -> None:
                    help=f"one seed: the first of --episodes consecutive seeds; several: exactly one distinct seed "
                         f"per episode (then --episodes, if given, must match their count) "
                         f"(default {TEST_SEED_BASE}.., never used in training)")
-    p.add_argument("--turbulence", type=_nonneg_float, default=1.0, help="Dryden sigma, m/s, every axis (default 1)")
+    p.add_argument("--turbulence", type=_nonneg_float, default=None,
+                   help="Dryden sigma, m/s, every axis (default 1; a task preset's own level, wake_surfing 0.25)")
     p.add_argument("--turbulence-field", default="frozen", choices=("frozen", "independent"),
                    help="one frozen field per formation (default) or independent Dryden streams per UAV")
     p.add_argument("--no-wake", action="store_true", help="switch the ELL wake off (default on)")
