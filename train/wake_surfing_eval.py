@@ -253,6 +253,17 @@ def _rounded(x, digits: int = 5):
 
 
 def main(argv=None) -> int:
+    """The command line; a bad argument or unreadable policy exits 2 with one line naming it."""
+    import zipfile
+
+    try:
+        return _main(argv)
+    except (ValueError, OSError, zipfile.BadZipFile) as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return 2
+
+
+def _main(argv=None) -> int:
     p = argparse.ArgumentParser(prog="python -m train.wake_surfing_eval", description=__doc__.split("\n\n")[0])
     p.add_argument("policies", nargs="*", help="SB3 zips (name them <group>_seed<k>.zip)")
     p.add_argument("--episodes", type=int, default=100)

@@ -67,3 +67,15 @@ def test_every_controller_flies_and_the_policy_beats_the_pid():
             assert e["saving"] <= e["saving_measured"] + 1e-12 or e["box_outside_frac"] > 0
         out[surfer.name] = np.mean([e["saving_ratio"] for e in eps])
     assert out["ppo"] > out["pid"] + 0.3
+
+
+def test_command_line_errors_exit_2_with_one_line(tmp_path, capsys):
+    from train.wake_surfing_eval import main
+
+    bad = tmp_path / "bad.zip"
+    bad.write_text("not a zip")
+    for argv, needle in (([str(tmp_path / "none.zip")], "does not exist"), (["--episodes", "0"], "--episodes"),
+                         (["--turbulence", "nan"], "--turbulence"), ([str(bad), "--episodes", "1"], "zip")):
+        assert main(argv) == 2
+        err = capsys.readouterr().err.strip()
+        assert len(err.splitlines()) == 1 and needle in err and "Traceback" not in err
