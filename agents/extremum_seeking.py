@@ -159,8 +159,8 @@ class ExtremumSeeking:
         kp, ki = np.array([g.kp_y, g.kp_z]), np.array([g.ki_y, g.ki_z])
         demand = setpoint - kp * err - ki * self.integral
         act = np.zeros((obs.shape[0], 4))
-        act[:, 1] = self.along._to_action(demand[:, 0], 1)
-        act[:, 2] = self.along._to_action(demand[:, 1], 2)
+        act[:, 1] = self.along.setpoint_action(demand[:, 0], 1)
+        act[:, 2] = self.along.setpoint_action(demand[:, 1], 2)
         free = np.abs(act[:, 1:3]) < 1.0
         self.integral += np.where(free | (np.sign(act[:, 1:3]) * err > 0), err * dt, 0.0)
         act[:, 3] = self.along.act(obs)[:, 3]

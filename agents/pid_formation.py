@@ -102,7 +102,7 @@ class PIDFormation:
         self.control_hz = float(control_hz)
         self.integral = np.zeros((0, 3))
 
-    def _to_action(self, offset_m, axis: int) -> np.ndarray:
+    def setpoint_action(self, offset_m, axis: int) -> np.ndarray:
         """The action that commands ``offset_m`` on ``axis`` (the inverse of the env's piecewise-linear
         set-point map; beyond the range it exceeds 1 and is clipped; 0 on an axis with no range)."""
         hi, lo = self.setpoint_high_m[axis], -self.setpoint_low_m[axis]
@@ -139,7 +139,8 @@ class PIDFormation:
         dy = -g.kp_cross * err[:, 1] - g.ki_cross * self.integral[:, 1]
         dz = -g.kp_down * err[:, 2] - g.ki_down * self.integral[:, 2] + g.k_energy * np.maximum(-err[:, 0], 0.0)
         dx = -g.kp_lead * err[:, 0]
-        raw = np.stack([self._to_action(dx, 0), self._to_action(dy, 1), self._to_action(dz, 2),
+        raw = np.stack([self.setpoint_action(dx, 0), self.setpoint_action(dy, 1),
+                        self.setpoint_action(dz, 2),
                         dv / self.speed_range_mps], axis=1)
         act = np.clip(raw, -1.0, 1.0)
         # conditional integration: integrate only the channels that are not saturated (or that the

@@ -98,8 +98,8 @@ def oracle_surfer(margin_b: float, name: str | None = None) -> Surfer:
         y, z, _ = reference_optimum(crab)
         offset = (np.stack([y, np.asarray(z) + margin_b], axis=1) - slot) * SPAN_M
         a = np.zeros((obs.shape[0], 4))
-        a[:, 1] = along._to_action(offset[:, 0], 1)
-        a[:, 2] = along._to_action(offset[:, 1], 2)
+        a[:, 1] = along.setpoint_action(offset[:, 0], 1)
+        a[:, 2] = along.setpoint_action(offset[:, 1], 2)
         a[:, 3] = along.act(obs)[:, 3]
         return np.clip(a, -1.0, 1.0)
 

@@ -8,6 +8,9 @@ surfaces       elevator, aileron, rudder = trim + a_k * L (L = the FCS surface l
 residual       added to the PID baseline's command: (0.1, 0.1, 0.1 rad, 0.2 throttle) * a, then clipped.
 setpoints      offsets of the PID trajectory tracker's demands: position demand + 5 m * (a0, a1, a2) along,
                starboard of and below the demanded track; speed demand + 2 m/s * a3 along the track.
+               With a safe box (``wake_surfing``): a1, a2 span the box piecewise linearly (0 the slot,
+               +-1 its walls), a0 is held (along-track fixed), a3 spans +-4 m/s
+               (:func:`formation_env.sim.params.setpoint_ranges`, ``setpoint_speed_range``).
 =============  ==============================================================================================
 
 The scales live in :mod:`formation_env.envs.engine` (``surface_scale``, ``RESIDUAL_SCALE``,
