@@ -223,9 +223,9 @@ def plot_surfing_figure(path, policy_zip: str, *, es_gains=None, crosswind_mps: 
         oy, oz, osav = reference_optimum(crab)
         ax.plot(float(oy), float(oz), marker="*", ms=16, color="white", mec="k", label=f"reference optimum ({float(osav):.3f})")
         ax.plot(1.0, 0.3, marker="s", ms=8, color="tab:red", mec="k", label="nominal slot (thesis PID)")
-        for surfer, colour in ((sb3_surfer(policy_zip, "policy"), "tab:orange"), (es_surfer(es_gains), "magenta")):
+        for surfer, colour, lw in ((es_surfer(es_gains), "magenta", 1.0), (sb3_surfer(policy_zip, "policy"), "tab:orange", 2.2)):
             ep = fly(surfer, [seed], config=cfg, keep_series=True, crosswind_mps=wind)[0]
-            ax.plot(ep["series"]["lateral_b"], ep["series"]["vertical_b"], color=colour, lw=1.2,
+            ax.plot(ep["series"]["lateral_b"], ep["series"]["vertical_b"], color=colour, lw=lw,
                     label=f"{'PPO policy' if surfer.name == 'policy' else 'extremum seeking'} (mean saving {ep['saving']:.3f})")
         ax.add_patch(plt.Rectangle((box[1, 0], box[2, 0]), box[1, 1] - box[1, 0], box[2, 1] - box[2, 0], fill=False,
                                    ec="k", lw=1.5, ls="--"))
