@@ -8,7 +8,7 @@ from collections.abc import Callable, Sequence
 
 import numpy as np
 
-__all__ = ["eval_env_config", "run_episodes", "SPAN_M", "SUCCESS_WINDOW_S"]
+__all__ = ["eval_env_config", "run_episodes", "longest_run", "SPAN_M", "SUCCESS_WINDOW_S"]
 
 SPAN_M = 2.9
 SUCCESS_WINDOW_S = 5.0
@@ -157,7 +157,7 @@ def run_episodes(act: Callable[[np.ndarray], np.ndarray], config, seeds: Sequenc
         if has_box:
             out_of_box = box[:n, i] > 0.0  # (T, A)
             m["box_outside_frac"] = float(np.mean(out_of_box))
-            m["box_outside_longest_s"] = float(max(_longest_run(out_of_box[:, j]) for j in range(a_n)) / config.control_hz)
+            m["box_outside_longest_s"] = float(max(longest_run(out_of_box[:, j]) for j in range(a_n)) / config.control_hz)
             m["box_depth_max_m"] = float(np.max(box[:n, i]))
         if moving:
             fe = final_err[:n, i]
@@ -181,7 +181,7 @@ def run_episodes(act: Callable[[np.ndarray], np.ndarray], config, seeds: Sequenc
     return out
 
 
-def _longest_run(flags: np.ndarray) -> int:
+def longest_run(flags: np.ndarray) -> int:
     """Length of the longest run of True in a 1-D bool array."""
     best = run = 0
     for f in flags:

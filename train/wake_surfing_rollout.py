@@ -115,11 +115,6 @@ def sb3_surfer(path: str, name: str | None = None) -> Surfer:
     return Surfer(name or Path(path).stem, lambda obs, saving: model.predict(obs, deterministic=True)[0])
 
 
-def _track_frame(d: np.ndarray, chi: np.ndarray) -> np.ndarray:
-    c, s = np.cos(chi), np.sin(chi)
-    return np.stack([c * d[..., 0] + s * d[..., 1], -s * d[..., 0] + c * d[..., 1], d[..., 2]], axis=-1)
-
-
 def fly(surfer: Surfer, seeds: Sequence[int], *, config=None, keep_series: bool = False,
         crosswind_mps: float | None = None) -> list[dict]:
     """Fly ``surfer`` on the wake-surfing episodes ``seeds`` (one batch) and measure each (see the module).
@@ -128,7 +123,9 @@ def fly(surfer: Surfer, seeds: Sequence[int], *, config=None, keep_series: bool 
     from formation_env.envs.core import FormationCore
     from formation_env.verification.wake_surfing import episode_reference
 
-    from .eval_episodes import _longest_run, eval_env_config
+    from formation_env.control.observation import ned_to_track_frame
+
+    from .eval_episodes import eval_env_config, longest_run
 
     seeds = [int(s) for s in seeds]
     if not seeds:
@@ -163,7 +160,7 @@ def fly(surfer: Surfer, seeds: Sequence[int], *, config=None, keep_series: bool 
         saving = np.where(alive, core.last_saving[:, 1], 0.0)
         vd0 = eng.velocity_demand[:, 0]
         chi = np.arctan2(vd0[:, 1], vd0[:, 0])
-        rel = _track_frame(eng.state[:, 1, 10:13] - eng.state[:, 0, 10:13], chi) / SPAN_M
+        rel = ned_to_track_frame(eng.state[:, 1, 10:13] - eng.state[:, 0, 10:13], chi) / SPAN_M
         rec["saving"].append(np.where(alive, saving, np.nan))
         rec["box"].append(np.where(alive, eng.out.box_depth_m[:, 1], np.nan))
         rec["sep"].append(np.where(alive, eng.out.separation_m[:, 1], np.nan))
@@ -205,7 +202,7 @@ def fly(surfer: Surfer, seeds: Sequence[int], *, config=None, keep_series: bool 
             "saving_ratio": float(np.mean(sv_in) / ref_saving),
             "time_to_80_s": float((reached[0] + 1) / hz) if len(reached) else float("nan"),
             "box_outside_frac": float(np.mean(outside)),
-            "box_outside_longest_s": float(_longest_run(outside) / hz),
+            "box_outside_longest_s": float(longest_run(outside) / hz),
             "min_separation_m": float(np.nanmin(arr["sep"][:n, i])),
             "collision": bool(collided[i]),
             "crashed": bool(crashed[i]),

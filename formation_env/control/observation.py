@@ -30,6 +30,7 @@ from formation_env.aircraft.state import N_STATES, POS, QUAT, VEL
 from formation_env.atmosphere.wind import WindInput
 
 __all__ = ["OBS_KEYS", "fcs_observation", "observation_from_arrays", "validate_observation", "slot_demand",
+           "ned_to_track_frame",
            "track_frame_offset_to_ned"]
 
 OBS_KEYS = ("position_ned", "velocity_ned", "euler", "rates_body", "airspeed", "position_demand_ned",
@@ -93,6 +94,15 @@ def track_frame_offset_to_ned(offset_track, track_angle_rad) -> np.ndarray:
     chi = np.asarray(track_angle_rad, dtype=float)
     c, s = np.cos(chi), np.sin(chi)
     return np.stack([c * off[..., 0] - s * off[..., 1], s * off[..., 0] + c * off[..., 1], off[..., 2]], axis=-1)
+
+
+def ned_to_track_frame(vector_ned, track_angle_rad) -> np.ndarray:
+    """An NED vector (m or m/s) -> track frame (x forward along the track at ``track_angle_rad`` from north,
+    y to starboard, z down): the inverse of :func:`track_frame_offset_to_ned`."""
+    v = np.asarray(vector_ned, dtype=float)
+    chi = np.asarray(track_angle_rad, dtype=float)
+    c, s = np.cos(chi), np.sin(chi)
+    return np.stack([c * v[..., 0] + s * v[..., 1], -s * v[..., 0] + c * v[..., 1], v[..., 2]], axis=-1)
 
 
 def slot_demand(leader_position_ned, leader_velocity_ned, slot_offset_track, slot_rate_track=None,

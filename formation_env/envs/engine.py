@@ -18,7 +18,7 @@ from ..aircraft.state import POS
 from ..atmosphere.frozen_field import frozen_field_reset
 from ..control import PIDFlightControl
 from ..control.law import fcs_params
-from ..control.observation import track_frame_offset_to_ned
+from ..control.observation import ned_to_track_frame, track_frame_offset_to_ned
 from ..geometry import aerosonde
 from ..scenarios import AEROSONDE_SPAN_M, Scenario, get_scenario
 from ..sim import WakeConfig
@@ -155,12 +155,11 @@ class FormationEpisode:
         if field_seeds:
             frozen_field_reset(self.params.field, s.field, idx, field_seeds)
         refresh(self.params, s, idx, self.out)
+        # the slot error the step measures (formation_env.sim.observe.slot_error): slot-frame components of
+        # position minus demand, weighted by the scenario's axes (along-track only with a safe box)
         err = s.aircraft[idx][..., 10:13] - s.position_demand[idx]
-        if sc.safe_box_b is None:
-            s.previous_error[idx] = np.linalg.norm(err, axis=-1)
-        else:  # the along-track error (slot_error_axes), in the slot frame of vehicle 0's demanded track
-            chi = np.arctan2(s.velocity_demand[idx, 0, 1], s.velocity_demand[idx, 0, 0])[:, None]
-            s.previous_error[idx] = np.abs(np.cos(chi) * err[..., 0] + np.sin(chi) * err[..., 1])
+        chi = np.arctan2(s.velocity_demand[idx, 0, 1], s.velocity_demand[idx, 0, 0])[:, None]
+        s.previous_error[idx] = np.linalg.norm(self.params.reward.slot_error_axes * ned_to_track_frame(err, chi), axis=-1)
         self.out.collided[idx] = False
         self.out.crashed[idx] = False
         self.out.saving[idx] = 0.0

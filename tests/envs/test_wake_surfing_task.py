@@ -198,3 +198,15 @@ def test_crosswind_draw_is_across_the_initial_track_and_seeded():
     assert np.all(wind[:, 0] == 0.0) and np.all(wind[:, 2] == 0.0)
     assert np.all(np.abs(wind[:, 1]) <= 5.0) and len(set(np.round(wind[:3, 1], 9))) == 3
     assert wind[3, 1] == wind[0, 1]
+
+
+def test_setpoint_map_is_piecewise_linear_with_the_slot_at_zero():
+    """The compiled set-point map of one axis: a * high above 0, -a * low below (so +-1 reach the
+    walls, 0 the slot, and it is continuous and monotonic across 0)."""
+    from formation_env.sim.step import _setpoint_shift
+
+    low, high = -0.58, 1.45
+    for a, expected in ((-1.0, low), (-0.5, 0.5 * low), (0.0, 0.0), (0.25, 0.25 * high), (1.0, high)):
+        assert _setpoint_shift(a, low, high) == pytest.approx(expected, abs=1e-15)
+    values = [_setpoint_shift(a, low, high) for a in np.linspace(-1.0, 1.0, 41)]
+    assert np.all(np.diff(values) > 0)

@@ -7,6 +7,7 @@ import numpy as np
 
 from formation_env.control.gains import AttitudeGains, AutopilotGains, FCSStructure, SASGains, TrackerGains
 from formation_env.control.law import CSTATE_NAMES
+from formation_env.control.tracker import track_errors  # Eqs. A.16-A.21, pinned by test_fcs_policy
 
 _I = {n: i for i, n in enumerate(CSTATE_NAMES)}
 
@@ -103,19 +104,6 @@ def heading_controller(chi_demand, chi, integral, gains: AutopilotGains):
 
 
 # ---------------------------------------------------------------- tracker (thesis A layers)
-def track_errors(position_ned, velocity_ned, position_demand_ned, velocity_demand_ned):
-    """``(ATD, OTD, dOTD, chi_d)`` per aircraft (m, m, m/s, rad); Eqs. A.16-A.21."""
-    vd = np.asarray(velocity_demand_ned)
-    chi_d = np.arctan2(vd[..., 1], vd[..., 0])
-    c, s = np.cos(chi_d), np.sin(chi_d)
-    d = np.asarray(position_ned) - np.asarray(position_demand_ned)
-    dv = np.asarray(velocity_ned) - vd
-    atd = c * d[..., 0] + s * d[..., 1]
-    otd = -s * d[..., 0] + c * d[..., 1]
-    dotd = -s * dv[..., 0] + c * dv[..., 1]
-    return atd, otd, dotd, chi_d
-
-
 def trajectory_tracker(position_ned, velocity_ned, position_demand_ned, velocity_demand_ned, integral,
                        gains: TrackerGains, anti_windup: bool = True):
     """``(chi_demand, V_demand, integral_rate, errors dict)``."""

@@ -11,7 +11,7 @@ import pytest
 from formation_env.envs.config import Randomisation, RewardWeights
 from formation_env.envs.tasks import WAKE_SURFING_RANDOMISATION, WAKE_SURFING_REWARD
 from train.config import load_hyperparams
-from train.eval_episodes import _longest_run, eval_env_config
+from train.eval_episodes import longest_run, eval_env_config
 from train.wake_surfing_eval import paired_gain, summarise_surfer
 from train.wake_surfing_rollout import es_surfer, fly, oracle_surfer, pid_formation_surfer, pid_surfer, sb3_surfer
 
@@ -49,7 +49,7 @@ def test_summary_counts_never_reaching_as_the_episode_length():
     assert s["time_to_80_s_mean_censored"] == pytest.approx((5 + 90 + 15) / 3)
     assert s["reached_80_frac"] == pytest.approx(2 / 3)
     assert s["box_outside_over_1s"] == 1 and s["box_outside_longest_s_worst"] == 2.0
-    assert _longest_run(np.array([1, 1, 0, 1, 1, 1, 0], bool)) == 3 and _longest_run(np.zeros(4, bool)) == 0
+    assert longest_run(np.array([1, 1, 0, 1, 1, 1, 0], bool)) == 3 and longest_run(np.zeros(4, bool)) == 0
 
 
 def test_every_controller_flies_and_the_policy_beats_the_pid():
