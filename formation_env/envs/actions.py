@@ -13,11 +13,12 @@ setpoints      offsets of the PID trajectory tracker's demands: position demand 
                (:func:`formation_env.sim.params.setpoint_ranges`, ``setpoint_speed_range``).
 =============  ==============================================================================================
 
-The scales live in :mod:`formation_env.envs.engine` (``surface_scale``, ``RESIDUAL_SCALE``,
+The scales live in :mod:`formation_env.sim.params` (``surface_scale``, ``RESIDUAL_SCALE``,
 ``SETPOINT_POSITION_SCALE_M``, ``SETPOINT_SPEED_SCALE_MPS``).
 """
 
 from .config import ACTION_MODES
-from .engine import RESIDUAL_SCALE, SETPOINT_POSITION_SCALE_M, SETPOINT_SPEED_SCALE_MPS, surface_scale
+from ..sim.params import RESIDUAL_SCALE, SETPOINT_POSITION_SCALE_M, SETPOINT_SPEED_SCALE_MPS
+from ..sim.simulation import surface_scale
 
 __all__ = ["ACTION_MODES", "RESIDUAL_SCALE", "SETPOINT_POSITION_SCALE_M", "SETPOINT_SPEED_SCALE_MPS", "surface_scale"]

@@ -46,7 +46,7 @@ import numpy as np
 # one table of scales, read by the compiled kernel (formation_env.sim.observe) and this documentation
 from ..sim.observe import (ALTITUDE_SCALE_M, CONTROLLER_STATE_SCALE, CONTROLLER_STATE_SIZE,
                            NEIGHBOUR_POSITION_SCALE_M, OBS_CLIP, OMEGA_REF, POSITION_SCALE_M, SCHEDULE_SIZE,
-                           VELOCITY_SCALE_MPS, WIND_SCALE_MPS)
+                           VELOCITY_SCALE_MPS, WIND_SCALE_MPS, group_sizes, observation_size)
 
 __all__ = ["OBS_CLIP", "GROUPS", "SCHEDULE_SIZE", "CONTROLLER_STATE_SIZE", "observation_size", "group_sizes",
            "to_dict", "slog"]
@@ -56,17 +56,6 @@ GROUPS = ("air_data", "attitude", "rates", "altitude", "slot_position_error", "s
           "controller_state", "neighbours")
 SCALES = (ALTITUDE_SCALE_M, CONTROLLER_STATE_SCALE, NEIGHBOUR_POSITION_SCALE_M, OMEGA_REF, POSITION_SCALE_M,
           VELOCITY_SCALE_MPS, WIND_SCALE_MPS)
-
-
-def group_sizes(n_vehicles: int) -> dict[str, int]:
-    return {"air_data": 3, "attitude": 3, "rates": 3, "altitude": 1, "slot_position_error": 3,
-            "slot_velocity_error": 3, "induced_wind": 3, "induced_rotation": 3, "ambient_wind": 3, "engine": 1,
-            "previous_action": 4, "slot_schedule": SCHEDULE_SIZE, "controller_state": CONTROLLER_STATE_SIZE,
-            "neighbours": 6 * (n_vehicles - 1)}
-
-
-def observation_size(n_vehicles: int) -> int:
-    return sum(group_sizes(n_vehicles).values())
 
 
 def slog(x, scale):

@@ -20,8 +20,8 @@ import numpy as np
 from gymnasium import spaces
 from pettingzoo import ParallelEnv
 
+from ..sim import Simulation
 from .config import EnvConfig
-from .core import FormationCore
 from .observations import OBS_CLIP, group_sizes, observation_size, to_dict
 
 __all__ = ["FormationParallelEnv", "make_config"]
@@ -59,11 +59,10 @@ class FormationParallelEnv(ParallelEnv):
         if render_mode is not None and render_mode not in self.metadata["render_modes"]:
             raise ValueError(f"render_mode must be one of {self.metadata['render_modes']} or None, got {render_mode!r}")
         self.render_mode = render_mode
-        self.core = FormationCore(self.config, batch_size=1)
-        self.engine = self.core.engine
-        n = self.engine.n_vehicles
-        self.agent_indices = self.core.agent_indices
-        self.substeps = self.core.substeps
+        self.sim = Simulation(self.config, batch_size=1)  # the episode's state lives there, nowhere else
+        n = self.sim.n_vehicles
+        self.agent_indices = self.sim.agent_indices
+        self.substeps = self.sim.substeps
         self.possible_agents = [f"uav_{i}" for i in self.agent_indices]
         self._index = {a: i for a, i in zip(self.possible_agents, self.agent_indices)}
         self.agents: list[str] = []
@@ -107,7 +106,7 @@ class FormationParallelEnv(ParallelEnv):
             # Gymnasium's convention: a seed also seeds the stream later unseeded resets draw from, so a
             # trainer that seeds only the first reset (RLlib's env runners do) replays exactly.
             self._entropy = np.random.SeedSequence(int(seed))
-        self.core.reset(seeds=[int(seed)])
+        self.sim.reset(seeds=[int(seed)])
         self.agents = list(self.possible_agents)
         return self._observations(), self._infos()
 
@@ -115,8 +114,8 @@ class FormationParallelEnv(ParallelEnv):
         if not self.agents:
             raise RuntimeError("step() called on a finished episode; call reset() first")
         act = self._validate_actions(actions)
-        rewards_all, terminated, truncated = self.core.step(act[None])
-        done, trunc = bool(terminated[0]), bool(truncated[0])
+        out = self.sim.step(act[None])
+        rewards_all, done, trunc = out.reward, bool(out.terminated[0]), bool(out.truncated[0])
         obs = self._observations()
         infos = self._infos()
         rewards = {a: float(rewards_all[0, i]) for a, i in self._index.items()}
@@ -130,7 +129,7 @@ class FormationParallelEnv(ParallelEnv):
 
     def state(self) -> np.ndarray:
         """Global state: every UAV's observation vector, concatenated (float32)."""
-        return self.core.observations()[0].reshape(-1).astype(np.float32)
+        return self.sim.output.observation[0].reshape(-1).astype(np.float32)
 
     def render(self):
         if self.render_mode is None:
@@ -138,7 +137,7 @@ class FormationParallelEnv(ParallelEnv):
         from .render import FormationRenderer
 
         if self._renderer is None:
-            self._renderer = FormationRenderer(self.engine, human=self.render_mode == "human")
+            self._renderer = FormationRenderer(self.sim, human=self.render_mode == "human")
         return self._renderer.draw()
 
     def close(self) -> None:
@@ -173,10 +172,10 @@ class FormationParallelEnv(ParallelEnv):
         return act
 
     def _observations(self) -> dict:
-        allobs = self.core.observations()[0].astype(np.float32)
-        n = self.engine.n_vehicles
+        allobs = self.sim.output.observation[0].astype(np.float32)
+        n = self.sim.n_vehicles
         return {a: to_dict(allobs[i], n) if self.config.obs_mode == "dict" else allobs[i] for a, i in self._index.items()}
 
     def _infos(self) -> dict:
-        per_vehicle = self.core.infos(0)
+        per_vehicle = self.sim.infos(0)
         return {a: per_vehicle[i] for a, i in self._index.items()}

@@ -2,7 +2,7 @@
 its two tip trailing legs drawn a few spans downstream along its air velocity, and its slot.
 
 Vehicles are labelled ``uav_<index>`` (the agent names). ``draw(formation=f)`` draws formation ``f``
-of a batched engine (the vector envs render each of their formations with one renderer)."""
+of a batched :class:`~formation_env.sim.Simulation` (the vector envs render each of their formations with one renderer)."""
 
 from __future__ import annotations
 
@@ -14,11 +14,11 @@ __all__ = ["FormationRenderer", "draw_formation", "SPAN_M", "LEG_LENGTH_M"]
 
 
 class FormationRenderer:
-    """Renders one formation of an engine. ``draw()`` returns an RGB array (H, W, 3) uint8, or None
+    """Renders one formation of a simulation. ``draw()`` returns an RGB array (H, W, 3) uint8, or None
     for a human renderer (``human=True``: the frame is shown in a window, as Gymnasium's
     ``render_mode="human"`` expects)."""
 
-    def __init__(self, engine, human: bool = False, size=(8.0, 4.0), dpi: int = 80) -> None:
+    def __init__(self, sim, human: bool = False, size=(8.0, 4.0), dpi: int = 80) -> None:
         import matplotlib
 
         if not human:
@@ -26,7 +26,7 @@ class FormationRenderer:
         import matplotlib.pyplot as plt
 
         self._plt = plt
-        self.engine = engine
+        self.sim = sim
         self.human = human
         # a fixed layout (the same pixels for the same state, frame after frame) with room for the
         # tick labels of absolute positions (altitude ~1000 m): axis labels, views and title never overlap
@@ -34,11 +34,11 @@ class FormationRenderer:
         self.fig.subplots_adjust(left=0.09, right=0.98, bottom=0.13, top=0.87, wspace=0.28)
 
     def draw(self, formation: int = 0) -> np.ndarray | None:
-        eng = self.engine
+        eng = self.sim
         f = int(formation)
         self.ax_top.cla()
         self.ax_side.cla()
-        draw_formation(self.ax_top, self.ax_side, eng.state[f], eng.position_demand[f], eng.ambient_wind()[f] + eng.induced[f])
+        draw_formation(self.ax_top, self.ax_side, eng.aircraft[f], eng.position_demand[f], eng.ambient_wind()[f] + eng.induced[f])
         for ax in (self.ax_top, self.ax_side):
             # absolute positions (altitude ~1e3 m): full tick values, no "+1e3" offset text
             ax.ticklabel_format(useOffset=False, style="plain")

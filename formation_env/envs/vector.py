@@ -26,8 +26,8 @@ from gymnasium import spaces
 from gymnasium.vector import AutoresetMode
 from stable_baselines3.common.vec_env.base_vec_env import VecEnv
 
+from ..sim import Simulation
 from .config import EnvConfig
-from .core import FormationCore
 from .observations import OBS_CLIP
 from .parallel import make_config
 
@@ -49,7 +49,7 @@ def _formation_frames(owner, batch: "BatchedFormations") -> list[np.ndarray]:
     if renderer is None:
         from .render import FormationRenderer
 
-        renderer = owner._renderer = FormationRenderer(batch.core.engine)
+        renderer = owner._renderer = FormationRenderer(batch.sim)
     frames = [renderer.draw(f) for f in range(batch.n_formations)]
     return [frames[i // batch.agents_per_formation] for i in range(batch.num_envs)]
 
@@ -62,16 +62,17 @@ def _close_renderer(owner) -> None:
 
 
 class BatchedFormations:
-    """Shared logic of the vector envs: flat (num_envs, ...) arrays over a FormationCore."""
+    """Shared logic of the vector envs: flat (num_envs, ...) arrays over a :class:`~formation_env.sim.Simulation`."""
 
     def __init__(self, n_formations: int, config: EnvConfig, seed: int | None = None) -> None:
         if config.obs_mode != "flat":
             raise ValueError("vector envs use flat observations (obs_mode='flat')")
-        self.core = FormationCore(config, batch_size=n_formations)
-        self.n_formations = self.core.batch_size
-        self.agents_per_formation = len(self.core.agent_indices)
+        self.sim = Simulation(config, batch_size=n_formations)
+        self.n_formations = self.sim.batch_size
+        self.agents = list(self.sim.agent_indices)
+        self.agents_per_formation = len(self.agents)
         self.num_envs = self.n_formations * self.agents_per_formation
-        self.obs_size = self.core.obs_size
+        self.obs_size = self.sim.obs_size
         self._seed_stream = np.random.SeedSequence(seed)
         self._pending_seeds: list[int | None] = [None] * self.n_formations
         self.t_start = time.perf_counter()
@@ -99,10 +100,10 @@ class BatchedFormations:
 
     def reset(self, formations=None) -> None:
         idx = np.arange(self.n_formations) if formations is None else np.asarray(formations, dtype=np.int64)
-        self.core.reset(idx, self._seeds_for(idx))
+        self.sim.reset(idx, self._seeds_for(idx))
 
     def observations(self) -> np.ndarray:
-        obs = self.core.observations()[:, list(self.core.agent_indices)]
+        obs = self.sim.output.observation[:, self.agents]
         return obs.reshape(self.num_envs, -1).astype(np.float32)
 
     def validate(self, actions) -> np.ndarray:
@@ -123,16 +124,16 @@ class BatchedFormations:
         """Returns obs (after auto-reset), rewards, terminated, truncated (num_envs,) and, for the
         finished formations, their final observations (num_envs, D) and finished mask."""
         a = self.validate(actions).reshape(self.n_formations, self.agents_per_formation, 4)
-        rewards_v, term_f, trunc_f = self.core.step(a)
-        rewards = rewards_v[:, list(self.core.agent_indices)].reshape(-1)
+        out = self.sim.step(a)
+        rewards, term_f, trunc_f = out.reward[:, self.agents].reshape(-1), out.terminated.copy(), out.truncated.copy()
         rep = self.agents_per_formation
         terminated, truncated = np.repeat(term_f, rep), np.repeat(trunc_f, rep)
         done_f = term_f | trunc_f
         final_obs = None
         if done_f.any():
             final_obs = self.observations()
-            st = self.core.engine.sim_state  # episode sums kept by the compiled step
-            self.final_episode = (st.episode_return[:, list(self.core.agent_indices)].reshape(-1).copy(),
+            st = self.sim.state  # episode sums kept by the compiled step
+            self.final_episode = (st.episode_return[:, self.agents].reshape(-1).copy(),
                                   np.repeat(st.episode_decisions, rep))
             self.reset(np.nonzero(done_f)[0])
         return self.observations(), rewards.astype(np.float32), terminated, truncated, final_obs, np.repeat(done_f, rep)
@@ -186,10 +187,10 @@ class FormationVecEnv(VecEnv):
         self._actions = None
         infos: list[dict] = [{} for _ in range(self.num_envs)]
         if self.detailed_infos:
-            core = self.batch.core
+            sim = self.batch.sim
             for f in range(self.batch.n_formations):
-                per_vehicle = core.infos(f)
-                for k, v in enumerate(core.agent_indices):
+                per_vehicle = sim.infos(f)
+                for k, v in enumerate(sim.agent_indices):
                     infos[f * self.batch.agents_per_formation + k] = per_vehicle[v]
         if final_obs is not None:
             ret, length = self.batch.final_episode

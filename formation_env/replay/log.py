@@ -5,7 +5,7 @@ episode with :class:`EpisodeRecorder` (call ``record()`` after ``reset`` and aft
 
     env = formation_env.parallel_env("formation_keeping")
     env.reset(seed=0)
-    rec = EpisodeRecorder(env.engine)   # records formation 0 of the engine
+    rec = EpisodeRecorder(env.sim)   # records formation 0 of the simulation
     rec.record()
     while env.agents:
         env.step({a: env.action_space(a).sample() for a in env.agents})
@@ -93,23 +93,22 @@ class EpisodeLog:
 
 
 class EpisodeRecorder:
-    """Records formation ``index`` of a :class:`~formation_env.envs.engine.FormationEpisode`
-    (``env.engine``): call :meth:`record` after reset and after every step; :meth:`log` gives the
-    :class:`EpisodeLog`. Reads only ``state``, ``induced``, ``omega``, ``time_s``,
-    ``position_demand`` and (if present) ``ambient_wind()``."""
+    """Records formation ``index`` of a :class:`~formation_env.sim.Simulation` (``env.sim``): call
+    :meth:`record` after reset and after every step; :meth:`log` gives the :class:`EpisodeLog`. Reads
+    only ``aircraft``, ``induced``, ``omega``, ``time_s``, ``position_demand`` and ``ambient_wind()``."""
 
-    def __init__(self, engine, index: int = 0) -> None:
-        self.engine = engine
+    def __init__(self, sim, index: int = 0) -> None:
+        self.sim = sim
         self.index = int(index)
         self._rows: list[tuple] = []
 
     def record(self) -> None:
-        e, i = self.engine, self.index
-        s = np.array(e.state[i], dtype=float)
+        e, i = self.sim, self.index
+        s = np.array(e.aircraft[i], dtype=float)
         q = s[:, 6:10]
         vel = np.einsum("vij,vj->vi", dcm_body_to_ned_from_quaternion(q), s[:, 0:3])
-        amb = np.asarray(e.ambient_wind()[i], dtype=float) if hasattr(e, "ambient_wind") else np.zeros_like(vel)
-        pd = np.array(e.position_demand[i], dtype=float) if hasattr(e, "position_demand") else np.full_like(vel, np.nan)
+        amb = np.asarray(e.ambient_wind()[i], dtype=float)
+        pd = np.array(e.position_demand[i], dtype=float)
         self._rows.append((float(np.asarray(e.time_s)[i]), s[:, 10:13].copy(), euler_from_quaternion(q), vel,
                            np.array(e.induced[i], dtype=float), np.array(e.omega[i], dtype=float), amb, pd))
 
@@ -120,6 +119,6 @@ class EpisodeRecorder:
         if not self._rows:
             raise ValueError("EpisodeRecorder: nothing recorded yet (call record() after reset and each step)")
         cols = list(zip(*self._rows))
-        sc = getattr(getattr(self.engine, "scenario", None), "name", "")
+        sc = self.sim.scenario.name
         return EpisodeLog(np.array(cols[0]), *(np.stack(c) for c in cols[1:]), scenario=sc,
-                          meta={"dt_s": float(getattr(self.engine, "dt", np.nan))})
+                          meta={"dt_s": float(self.sim.dt)})

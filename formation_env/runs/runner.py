@@ -51,8 +51,7 @@ def run_scenario(scenario: str | Scenario, wake: bool | None = None, duration_s:
     """Fly ``scenario`` (a name or a :class:`Scenario`) with the PID baseline on every aircraft;
     ``wake`` None uses its default. The physics step is the environments' episode engine (so an
     env flown by the PID gives exactly these numbers); this function records the histories."""
-    from ..envs.config import EnvConfig
-    from ..envs.engine import FormationEpisode
+    from ..sim import EnvConfig, Simulation
 
     sc = get_scenario(scenario) if isinstance(scenario, str) else scenario
     if not isinstance(sc, Scenario):
@@ -62,7 +61,9 @@ def run_scenario(scenario: str | Scenario, wake: bool | None = None, duration_s:
         raise ValueError(f"duration_s must be in (0, {MAX_DURATION_S:g}] s, got {duration_s!r}")
     if duration_s is not None and duration_s < sc.dt:
         raise ValueError(f"duration_s {duration_s!r} is shorter than one step of {sc.name!r} ({sc.dt:g} s)")
-    eng = FormationEpisode(EnvConfig(scenario=sc, wake=wake, duration_s=duration_s), 1, wake_config=wake_config)
+    # every UAV PID-flown (no agents), one physics step per decision
+    eng = Simulation(EnvConfig(scenario=sc, wake=wake, duration_s=duration_s, control_hz=1.0 / sc.dt), 1, agents=(),
+                     wake_config=wake_config)
     eng.reset(seeds=[0])  # nothing is randomised: the seed is not used
     n_steps, v = eng.n_steps, sc.n_vehicles
     names3 = ("position_ned", "velocity_ned", "euler", "rates_body", "controls", "induced_wind_ned",
@@ -74,11 +75,11 @@ def run_scenario(scenario: str | Scenario, wake: bool | None = None, duration_s:
     completed, message = True, "completed"
     for k in range(n_steps):
         t = k * sc.dt
-        state, amb = eng.state[0].copy(), eng.ambient_wind()[0]
+        state, amb = eng.aircraft[0].copy(), eng.ambient_wind()[0]
         obs = fcs_observation(state, np.zeros(3), np.zeros(3), WindInput(wind_ned=amb + eng.induced[0]))
         pd, vd = eng.position_demand[0].copy(), eng.velocity_demand[0].copy()  # the demands of this step
-        eng.physics_step(None)
-        cmd, induced, status = eng.commands[0], eng.induced[0], eng.status[0]
+        eng.step()
+        cmd, induced, status = eng.commands[0], eng.induced[0], eng.state.status[0]
         ad = air_data_of(state, WindInput(wind_ned=amb + induced))
         atd, otd, _, _ = track_errors(obs["position_ned"], obs["velocity_ned"], pd, vd)
         h["position_ned"][k], h["velocity_ned"][k], h["euler"][k] = obs["position_ned"], obs["velocity_ned"], obs["euler"]

@@ -12,8 +12,10 @@ import math
 import numba as nb
 import numpy as np
 
-from ..aircraft.kernels import _air
-from ..frames import quaternion_dcm_terms
+from ..aircraft.kernels import air_data_kernel
+from ..aircraft.state import POS_D, POS_E, POS_N
+from ..frames import ned_to_track_xy, quaternion_dcm_terms
+from .kernels import min_separation_each  # noqa: F401  (re-exported: the one separation kernel lives there)
 
 __all__ = ["observe_formation", "reward_formation", "REWARD_TERMS", "OBS_CLIP", "OMEGA_REF", "min_separation_each", "signed_log",
            "box_depth_each", "slot_error"]
@@ -71,7 +73,7 @@ def observe_formation(x, induced, omega, amb, pd, vd, prev, schedule, cstate, tr
         o = out[a]
         for k in range(3):
             wind[k] = amb[a, k] + induced[a, k]
-        va, al, be = _air(xa, wind, air_params)[:3]
+        va, al, be = air_data_kernel(xa, wind, air_params)[:3]
         e0, ex, ey, ez = xa[6], xa[7], xa[8], xa[9]
         n2 = e0 * e0 + ex * ex + ey * ey + ez * ez
         phi = math.atan2(2.0 * (e0 * ex + ey * ez), e0 * e0 - ex * ex - ey * ey + ez * ez)
@@ -85,14 +87,16 @@ def observe_formation(x, induced, omega, amb, pd, vd, prev, schedule, cstate, tr
         o[4] = theta / 0.5
         o[5] = ((psi - chi[a] + math.pi) % (2.0 * math.pi) - math.pi) / 0.5
         o[6], o[7], o[8] = xa[3], xa[4], xa[5]
-        o[9] = signed_log(-xa[12] - altitude, ALTITUDE_SCALE_M)
-        dx, dy, dz = xa[10] - pd[a, 0], xa[11] - pd[a, 1], xa[12] - pd[a, 2]
-        o[10] = signed_log(c * dx + s * dy, POSITION_SCALE_M)
-        o[11] = signed_log(-s * dx + c * dy, POSITION_SCALE_M)
+        o[9] = signed_log(-xa[POS_D] - altitude, ALTITUDE_SCALE_M)
+        dx, dy, dz = xa[POS_N] - pd[a, 0], xa[POS_E] - pd[a, 1], xa[POS_D] - pd[a, 2]
+        tx, ty = ned_to_track_xy(c, s, dx, dy)
+        o[10] = signed_log(tx, POSITION_SCALE_M)
+        o[11] = signed_log(ty, POSITION_SCALE_M)
         o[12] = signed_log(dz, POSITION_SCALE_M)
         dx, dy, dz = vel[a, 0] - vd[a, 0], vel[a, 1] - vd[a, 1], vel[a, 2] - vd[a, 2]
-        o[13] = signed_log(c * dx + s * dy, VELOCITY_SCALE_MPS)
-        o[14] = signed_log(-s * dx + c * dy, VELOCITY_SCALE_MPS)
+        tx, ty = ned_to_track_xy(c, s, dx, dy)
+        o[13] = signed_log(tx, VELOCITY_SCALE_MPS)
+        o[14] = signed_log(ty, VELOCITY_SCALE_MPS)
         o[15] = signed_log(dz, VELOCITY_SCALE_MPS)
         r00, r01, r02, r10, r11, r12, r20, r21, r22 = quaternion_dcm_terms(e0, ex, ey, ez)
         w0, w1, w2 = induced[a, 0], induced[a, 1], induced[a, 2]
@@ -101,8 +105,9 @@ def observe_formation(x, induced, omega, amb, pd, vd, prev, schedule, cstate, tr
         o[18] = r02 * w0 + r12 * w1 + r22 * w2
         o[19], o[20], o[21] = omega[a, 0], omega[a, 1], omega[a, 2]
         dx, dy, dz = amb[a, 0], amb[a, 1], amb[a, 2]
-        o[22] = signed_log(c * dx + s * dy, WIND_SCALE_MPS)
-        o[23] = signed_log(-s * dx + c * dy, WIND_SCALE_MPS)
+        tx, ty = ned_to_track_xy(c, s, dx, dy)
+        o[22] = signed_log(tx, WIND_SCALE_MPS)
+        o[23] = signed_log(ty, WIND_SCALE_MPS)
         o[24] = signed_log(dz, WIND_SCALE_MPS)
         o[25] = xa[14] / OMEGA_REF - 1.0
         o[26], o[27], o[28], o[29] = prev[a, 0], prev[a, 1], prev[a, 2], prev[a, 3]
@@ -116,31 +121,19 @@ def observe_formation(x, induced, omega, amb, pd, vd, prev, schedule, cstate, tr
         for j in range(nv):
             if j == a:
                 continue
-            dx, dy, dz = x[j, 10] - xa[10], x[j, 11] - xa[11], x[j, 12] - xa[12]
-            o[k] = signed_log(c * dx + s * dy, NEIGHBOUR_POSITION_SCALE_M)
-            o[k + 1] = signed_log(-s * dx + c * dy, NEIGHBOUR_POSITION_SCALE_M)
+            dx, dy, dz = x[j, POS_N] - xa[POS_N], x[j, POS_E] - xa[POS_E], x[j, POS_D] - xa[POS_D]
+            tx, ty = ned_to_track_xy(c, s, dx, dy)
+            o[k] = signed_log(tx, NEIGHBOUR_POSITION_SCALE_M)
+            o[k + 1] = signed_log(ty, NEIGHBOUR_POSITION_SCALE_M)
             o[k + 2] = signed_log(dz, NEIGHBOUR_POSITION_SCALE_M)
             dx, dy, dz = vel[j, 0] - vel[a, 0], vel[j, 1] - vel[a, 1], vel[j, 2] - vel[a, 2]
-            o[k + 3] = signed_log(c * dx + s * dy, VELOCITY_SCALE_MPS)
-            o[k + 4] = signed_log(-s * dx + c * dy, VELOCITY_SCALE_MPS)
+            tx, ty = ned_to_track_xy(c, s, dx, dy)
+            o[k + 3] = signed_log(tx, VELOCITY_SCALE_MPS)
+            o[k + 4] = signed_log(ty, VELOCITY_SCALE_MPS)
             o[k + 5] = signed_log(dz, VELOCITY_SCALE_MPS)
             k += 6
         for k in range(o.shape[0]):
             o[k] = _clean(o[k])
-
-
-@_jit
-def min_separation_each(x, out):
-    """(V,) distance from each UAV's CG to its nearest neighbour (inf alone; NaN if non-finite)."""
-    nv = x.shape[0]
-    for i in range(nv):
-        best = np.inf
-        for j in range(nv):
-            if j != i:
-                d = math.sqrt((x[i, 10] - x[j, 10]) ** 2 + (x[i, 11] - x[j, 11]) ** 2 + (x[i, 12] - x[j, 12]) ** 2)
-                if d < best or d != d:
-                    best = d
-        out[i] = best
 
 
 @_jit
@@ -149,8 +142,8 @@ def slot_error(dn, de, dd, chi, axes):
     (along the track at angle ``chi``, starboard, down) weighted by ``axes`` (3,): (1, 1, 1) the
     Euclidean distance; (1, 0, 0) the along-track distance only (a safe-box task: the follower is free
     across and up/down within its box)."""
-    c, s = math.cos(chi), math.sin(chi)
-    ex, ey, ez = axes[0] * (c * dn + s * de), axes[1] * (-s * dn + c * de), axes[2] * dd
+    tx, ty = ned_to_track_xy(math.cos(chi), math.sin(chi), dn, de)
+    ex, ey, ez = axes[0] * tx, axes[1] * ty, axes[2] * dd
     return math.sqrt(ex * ex + ey * ey + ez * ez)
 
 
@@ -162,8 +155,9 @@ def box_depth_each(x, chi, low, high, out):
     charges it)."""
     c, s = math.cos(chi), math.sin(chi)
     for a in range(x.shape[0]):
-        dn, de, dd = x[a, 10] - x[0, 10], x[a, 11] - x[0, 11], x[a, 12] - x[0, 12]
-        rel = (c * dn + s * de, -s * dn + c * de, dd)
+        dn, de, dd = x[a, POS_N] - x[0, POS_N], x[a, POS_E] - x[0, POS_E], x[a, POS_D] - x[0, POS_D]
+        tx, ty = ned_to_track_xy(c, s, dn, de)
+        rel = (tx, ty, dd)
         depth2 = 0.0
         for k in range(3):
             over = max(low[a, k] - rel[k], rel[k] - high[a, k], 0.0)
@@ -215,3 +209,16 @@ def reward_formation(w, error, previous_error, action, previous_action, saving, 
         # scale), and the step at the wall already outweighs any saving the ELL reports beyond it
         depth_scales = min(box_depth[a] / w.box_scale_m, BOX_DEPTH_CAP_SCALES)
         out[a, 8] = -w.box * (1.0 + _huber(depth_scales)) if box_depth[a] > 0.0 else 0.0
+
+
+def group_sizes(n_vehicles: int) -> dict[str, int]:
+    """Size of each observation group (formation_env.envs.observations documents them), for V UAVs."""
+    return {"air_data": 3, "attitude": 3, "rates": 3, "altitude": 1, "slot_position_error": 3,
+            "slot_velocity_error": 3, "induced_wind": 3, "induced_rotation": 3, "ambient_wind": 3, "engine": 1,
+            "previous_action": 4, "slot_schedule": SCHEDULE_SIZE, "controller_state": CONTROLLER_STATE_SIZE,
+            "neighbours": 6 * (n_vehicles - 1)}
+
+
+def observation_size(n_vehicles: int) -> int:
+    """Length D of one UAV's flat observation vector in a formation of V UAVs."""
+    return sum(group_sizes(n_vehicles).values())

@@ -2,7 +2,7 @@
 
 The follower's induced-drag saving ``1 - D_i(formation) / D_i(alone)`` (ELL, Kutta-Joukowski
 loads: :func:`formation_env.wake.formation_benefit`) is mapped over follower slots. The vehicle
-model is the simulator's: :class:`formation_env.sim.FormationSimulator` builds the ELL model from
+model is the simulator's: :func:`formation_env.sim.formation.wake_model_for` builds the ELL model from
 its :class:`~formation_env.sim.formation.WakeConfig` (default: the Aerosonde's wing, nseg 10,
 Kurylowich core, control points, viscous AIC) and the wing origin from the aircraft data, and the
 ELL poses come from :func:`~formation_env.sim.formation.ell_state_from_aircraft`, exactly as the
@@ -58,12 +58,11 @@ _FD_STEP_B = 1e-6  # finite-difference step of the optimiser's gradient, spans
 def _setup(wake: WakeConfig, airspeed_mps: float, altitude_m: float):
     """The simulator's two-ship ELL model and wing origin, and the trim state (built once)."""
     from ..aircraft import trim
-    from ..sim.formation import FormationSimulator
+    from ..sim.formation import wake_model_for, wing_origin_body
 
     if not wake.enabled:
         raise ValueError("close_formation_map: the wake must be enabled")
-    sim = FormationSimulator(2, 1, wake=wake)
-    return sim.wake_model, sim.wing_origin_body, trim(airspeed_mps, altitude_m)
+    return wake_model_for(wake, 2), wing_origin_body(), trim(airspeed_mps, altitude_m)
 
 
 def slot_savings(offsets_b, *, wake: WakeConfig = WakeConfig(), airspeed_mps: float = 25.0,

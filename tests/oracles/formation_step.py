@@ -9,7 +9,7 @@ import numpy as np
 from formation_env.aircraft import check_envelope, step
 from formation_env.aircraft.state import N_STATES
 from formation_env.atmosphere.wind import WindInput
-from formation_env.sim.formation import StepResult
+from tests.oracles.physics_simulator import StepResult
 
 
 def reference_step(sim, state, controls, amb, turb) -> StepResult:

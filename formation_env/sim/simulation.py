@@ -1,0 +1,527 @@
+"""The public batched simulation engine: :class:`Simulation`, B formations of a scenario stepped together.
+
+Everything that flies episodes goes through it: the PettingZoo / Gymnasium / vector env adapters (which
+keep no state of their own), the scenario runner (every UAV PID-flown at the physics rate), the batched
+rollout of the evaluation, replay and the wake-surfing evaluation.
+
+>>> from formation_env.sim import EnvConfig, Simulation
+>>> sim = Simulation(EnvConfig(scenario="formation_keeping", action_mode="setpoints"), batch_size=4)
+>>> out = sim.reset(seeds=[0, 1, 2, 3])
+>>> out = sim.step(np.zeros((4, sim.n_agents, 4)))     # out.observation (4, V, D), out.reward (4, V), ...
+
+The state is one :class:`~formation_env.sim.state.SimState` of arrays (nothing carries physics in
+hidden attributes); :meth:`step` is the compiled decision step (:func:`formation_env.sim.step.step`),
+:meth:`reset` draws each episode's randomisation with a numpy generator per formation and seed. What a
+caller needs to set (a per-episode steady wind) is a reset option, never a write into the state arrays.
+The arrays :meth:`step` returns are views updated in place by the next call: copy what you keep.
+
+Shapes: B formations, V UAVs, A agents (the UAVs the actions command; the others fly the thesis PID),
+D the observation size. Units SI, frames NED earth and body (x forward, y starboard, z down).
+"""
+
+from __future__ import annotations
+
+import math
+from typing import NamedTuple
+
+import numpy as np
+
+from ..aircraft import AEROSONDE, trim
+from ..aircraft.state import POS
+from ..atmosphere.frozen_field import frozen_field_reset
+from ..control import PIDFlightControl
+from ..control.law import fcs_params
+from ..control.observation import ned_to_track_frame, track_frame_offset_to_ned
+from ..geometry import aerosonde
+from ..scenarios import AEROSONDE_SPAN_M, Scenario, get_scenario
+from ..wake import WakeModel
+from ..wake.loads import isolated_model
+from .config import EnvConfig
+from .formation import WakeConfig, wake_model_for, wing_origin_body
+from .observe import REWARD_TERMS, observation_size
+from .params import (ACTION_MODE_CODES, RESIDUAL_SCALE, ActionParams, RewardParams, StepParams, aircraft_arrays,
+                     safe_box_arrays, scenario_arrays, setpoint_ranges, setpoint_speed_range, slot_error_axes,
+                     turbulence_params, wake_arrays)
+from .state import StepOutput, init_output, init_state
+from .step import observe, refresh, step
+
+__all__ = ["Simulation", "SimOutput", "InfoArrays", "RESET_OPTIONS", "INFO_REWARD_KEYS", "reward_info_key",
+           "separation_each"]
+
+_REWARD_TERM_NAMES = (*REWARD_TERMS, "total")
+
+#: the options :meth:`Simulation.reset` takes (an unknown one is a ``TypeError``)
+RESET_OPTIONS = ("steady_wind_ned",)
+
+
+def reward_info_key(term: str) -> str:
+    """The flat info key of a reward term: ``"slot"`` -> ``"reward_slot"`` (``"total"``: the reward itself)."""
+    if term not in _REWARD_TERM_NAMES:
+        raise ValueError(f"unknown reward term {term!r}; terms: {list(_REWARD_TERM_NAMES)}")
+    return f"reward_{term}"
+
+
+#: the flat info keys of the reward's terms, in REWARD_TERMS order, then ``reward_total``
+INFO_REWARD_KEYS = tuple(reward_info_key(t) for t in _REWARD_TERM_NAMES)
+
+
+def surface_scale(limit_rad: float) -> np.ndarray:
+    """Surfaces-mode scale per unit action: the FCS surface limit (rad) for the three surfaces,
+    0.5 for the throttle."""
+    return np.array([limit_rad, limit_rad, limit_rad, 0.5])
+
+
+class SimOutput(NamedTuple):
+    """What :meth:`Simulation.reset` and :meth:`Simulation.step` return, for every UAV (views: copy to keep).
+
+    ``terminated`` / ``truncated`` describe the last step (a reset leaves them as they were, so that a
+    caller resetting finished formations keeps reading why they finished)."""
+
+    observation: np.ndarray  # (B, V, D) float64
+    reward: np.ndarray  # (B, V) total reward of the last decision (0 after a reset)
+    terminated: np.ndarray  # (B,) bool: collision or a UAV left the envelope
+    truncated: np.ndarray  # (B,) bool: time limit reached (and not terminated)
+    info: "InfoArrays"  # every info quantity as arrays with the batch axis
+
+
+class InfoArrays:
+    """The info quantities of all formations as arrays (B, V, ...), read from the simulation's state at
+    access time (nothing is computed unless read). Never NaN: a diverged UAV's values read as its last
+    finite ones (the kernel's outputs) or 0."""
+
+    def __init__(self, sim: "Simulation") -> None:
+        self._sim = sim
+
+    @property
+    def time_s(self) -> np.ndarray:
+        """(B,) episode time, s."""
+        return self._sim.time_s
+
+    @property
+    def slot_error_m(self) -> np.ndarray:
+        """(B, V) distance from the slot, m: slot-frame components weighted by the scenario's axes
+        (along-track only with a safe box); the reward's definition, the same at reset and after a step."""
+        return self._sim.output.slot_error_m
+
+    @property
+    def slot_error_ned_m(self) -> np.ndarray:
+        """(B, V, 3) position minus demanded position, m NED."""
+        s = self._sim.state
+        return s.aircraft[..., POS] - s.position_demand
+
+    @property
+    def min_separation_m(self) -> np.ndarray:
+        """(B, V) distance to the nearest other UAV, m (inf alone)."""
+        s, out = self._sim.state, self._sim.output
+        return np.stack([separation_each(s.aircraft[i], out.separation_m[i]) for i in range(s.aircraft.shape[0])])
+
+    @property
+    def induced_wind_ned_mps(self) -> np.ndarray:
+        """(B, V, 3) ELL effective induced wind, m/s NED."""
+        return self._sim.state.induced_wind_ned
+
+    @property
+    def induced_omega_body_rad_s(self) -> np.ndarray:
+        """(B, V, 3) ELL effective rotational wind, rad/s body."""
+        return self._sim.state.induced_omega_body
+
+    @property
+    def fuel_kg(self) -> np.ndarray:
+        """(B, V) fuel on board, kg."""
+        return self._sim.state.aircraft[..., 13]
+
+    @property
+    def gust_ned_mps(self) -> np.ndarray:
+        """(B, V, 3) turbulence at each UAV, m/s NED."""
+        return self._sim.state.gust_ned
+
+    @property
+    def steady_wind_ned_mps(self) -> np.ndarray:
+        """(B, 3) the episode's steady wind, m/s NED."""
+        return self._sim.state.steady_wind
+
+    @property
+    def velocity_demand_ned_mps(self) -> np.ndarray:
+        """(B, V, 3) demanded ground velocities, m/s NED (vehicle 0's: the leader's demanded track)."""
+        return self._sim.state.velocity_demand
+
+    @property
+    def status(self) -> np.ndarray:
+        """(B, V) int64 envelope status bits of the last physics step (0: inside)."""
+        return self._sim.state.status
+
+    @property
+    def collision(self) -> np.ndarray:
+        """(B,) bool: the last decision ended in a collision."""
+        return self._sim.output.collided
+
+    @property
+    def crashed(self) -> np.ndarray:
+        """(B, V) bool: the UAV left the envelope (or diverged) during the last decision."""
+        return self._sim.output.crashed
+
+    @property
+    def command(self) -> np.ndarray:
+        """(B, V, 4) controls of the last physics step: elevator, aileron, rudder rad, throttle 0..1."""
+        return self._sim.state.command
+
+    @property
+    def induced_drag_saving(self) -> np.ndarray:
+        """(B, V) induced-drag saving against the same UAV alone (0 unless the benefit is on)."""
+        return self._sim.output.saving
+
+    @property
+    def box_depth_m(self) -> np.ndarray:
+        """(B, V) distance outside the UAV's safe box, m (0 inside or without a box)."""
+        return self._sim.output.box_depth_m
+
+    @property
+    def reward_terms(self) -> np.ndarray:
+        """(B, V, T) the last decision's reward terms in REWARD_TERMS order (0 after a reset)."""
+        return self._sim.output.reward_terms
+
+
+class Simulation:
+    """B formations of ``config``'s scenario: ``reset(indices, seeds, options)``, then ``step(actions)``.
+
+    ``agents``: the UAV indices the actions command (default: ``config.learning``; ``()``: every UAV
+    flies the thesis PID, the scenario runner's case). ``wake_config``: how the ELL is modelled
+    (default :class:`~formation_env.sim.formation.WakeConfig`). One decision holds the actions for
+    ``physics_hz / config.control_hz`` physics steps."""
+
+    def __init__(self, config: EnvConfig, batch_size: int = 1, *, agents=None,
+                 wake_config: WakeConfig | None = None) -> None:
+        if not isinstance(config, EnvConfig):
+            raise ValueError(f"Simulation: config must be an EnvConfig, got {type(config).__name__}")
+        if isinstance(batch_size, bool) or not isinstance(batch_size, (int, np.integer)) or batch_size < 1:
+            raise ValueError(f"batch_size must be an integer >= 1, got {batch_size!r}")
+        self.config = config
+        self.scenario: Scenario = config.scenario if isinstance(config.scenario, Scenario) else get_scenario(config.scenario)
+        sc = self.scenario
+        self.batch_size = int(batch_size)
+        self.n_vehicles = v = sc.n_vehicles
+        self.agent_indices = self._agent_indices(agents)
+        self.agent_mask = np.zeros(v, dtype=bool)
+        self.agent_mask[list(self.agent_indices)] = True
+        self.dt = sc.dt
+        ratio = (1.0 / sc.dt) / config.control_hz
+        if abs(ratio - round(ratio)) > 1e-9 or round(ratio) < 1:
+            raise ValueError(f"control_hz must divide the physics rate {1.0 / sc.dt:g} Hz, got {config.control_hz!r}")
+        self.substeps = int(round(ratio))
+        self.duration_s = sc.duration_s if config.duration_s is None else config.duration_s
+        self.n_steps = int(round(self.duration_s / self.dt))
+        self.wake = sc.wake_default if config.wake is None else config.wake
+        self.trim = trim(sc.airspeed_mps, sc.altitude_m)
+        fc = PIDFlightControl.from_trim(self.trim, dt=sc.dt).config
+        self.surface_limit_rad = float(fc.surface_limit_rad)
+        self.throttle_limits = tuple(float(x) for x in fc.throttle_limits)
+        wc = wake_config if wake_config is not None else WakeConfig()
+        vehicle = aerosonde(nseg=wc.nseg, tailplane=wc.tailplane)
+        self.wake_model = wake_model_for(wc, v) if self.wake else None
+        self.wing_origin_body = wing_origin_body(AEROSONDE)
+        lattice = self.wake_model or WakeModel([vehicle])  # the kernel needs arrays even without wake
+        alone = isolated_model(vehicle, wc.core, wc.eval_points, wc.rotational, lattice.kinematic_viscosity,
+                               wc.viscous_aic)
+        rnd, w = config.randomisation, config.reward
+        sigma = rnd.turbulence_sigma_mps
+        self.params = StepParams(
+            dt_s=float(sc.dt), substeps=self.substeps, episode_steps=self.n_steps,
+            wake_on=self.wake_model is not None, wake_update_every=int(config.wake_update_every),
+            turbulence=0 if sigma <= 0 else (1 if config.turbulence_field == "frozen" else 2),
+            benefit_on=bool((config.compute_benefit or w.benefit > 0) and self.wake_model is not None),
+            aircraft=aircraft_arrays(), wake=wake_arrays(lattice, self.wing_origin_body),
+            wake_alone=wake_arrays(alone, self.wing_origin_body), scenario=scenario_arrays(sc, rnd.any_manoeuvre),
+            fcs=fcs_params(fc, sc.dt), action=self._action_params(config), reward=self._reward_params(config),
+            field=turbulence_params(sc, sigma), trim_airspeed_mps=float(sc.airspeed_mps))
+        self.state = init_state(self.batch_size, v, lattice.n_panels, self.params.field)
+        self.output: StepOutput = init_output(self.batch_size, v, observation_size(v))
+        self.obs_size = observation_size(v)
+        self.info = InfoArrays(self)
+        self._actions = np.zeros((self.batch_size, v, 4))
+        self._reset_once = np.zeros(self.batch_size, dtype=bool)
+
+    # ------------------------------------------------------------------ construction
+    def _agent_indices(self, agents) -> tuple[int, ...]:
+        n, cfg = self.n_vehicles, self.config
+        if agents is not None:
+            idx = tuple(int(i) for i in agents)
+            bad = [i for i in idx if not 0 <= i < n]
+            if bad or len(set(idx)) != len(idx):
+                raise ValueError(f"agents {list(agents)} must be unique UAV indices in [0, {n - 1}]")
+            return tuple(sorted(idx))
+        if cfg.learning == "all":
+            return tuple(range(n))
+        if cfg.learning == "followers":
+            if n < 2:
+                raise ValueError(f"learning='followers' needs a formation; scenario {cfg.scenario!r} has one UAV")
+            return tuple(range(1, n))
+        bad = [i for i in cfg.learning if not 0 <= i < n]
+        if bad:
+            raise ValueError(f"learning indices {bad} out of range for {n} UAVs in {cfg.scenario!r}")
+        return tuple(sorted(cfg.learning))
+
+    def _action_params(self, config: EnvConfig) -> ActionParams:
+        lim, sc = self.surface_limit_rad, self.scenario
+        low, high = setpoint_ranges(sc)
+        return ActionParams(
+            mode=ACTION_MODE_CODES[config.action_mode], agent_mask=self.agent_mask.copy(),
+            trim_controls=np.ascontiguousarray(self.trim.controls[0, :4], float), surface_scale=surface_scale(lim),
+            residual_scale=np.asarray(RESIDUAL_SCALE, float), setpoint_low_m=low, setpoint_high_m=high,
+            setpoint_speed_mps=setpoint_speed_range(sc),
+            command_min=np.array([-lim, -lim, -lim, self.throttle_limits[0]]),
+            command_max=np.array([lim, lim, lim, self.throttle_limits[1]]))
+
+    def _reward_params(self, config: EnvConfig) -> RewardParams:
+        w, sc, span = config.reward, self.scenario, AEROSONDE_SPAN_M
+        box_low, box_high = safe_box_arrays(sc)
+        return RewardParams(
+            slot=w.slot, slot_scale_m=w.slot_scale_m, effort=w.effort, rate=w.rate, benefit=w.benefit,
+            progress=w.progress, shaping_gamma=w.shaping_gamma, terminal_forfeit=w.terminal_forfeit,
+            separation=w.separation, barrier_separation_m=w.barrier_separation_b * span, collision=w.collision,
+            crash=w.crash, collision_separation_m=config.collision_separation_b * span, box=w.box,
+            box_scale_m=w.box_scale_b * span, box_low_m=box_low, box_high_m=box_high,
+            slot_error_axes=slot_error_axes(sc))
+
+    # ------------------------------------------------------------------ API
+    @property
+    def n_agents(self) -> int:
+        return len(self.agent_indices)
+
+    @property
+    def benefit_enabled(self) -> bool:
+        return bool(self.params.benefit_on)
+
+    def reset(self, indices=None, seeds=None, options: dict | None = None) -> SimOutput:
+        """Start the formations ``indices`` (default all) anew; ``seeds`` one int (or None) each.
+
+        ``options`` (applied to every formation reset): ``steady_wind_ned`` (3,) or (n, 3) m/s NED
+        replaces the episode's drawn steady wind (the random draws are made all the same, so the rest of
+        the episode is the seed's)."""
+        idx = np.arange(self.batch_size) if indices is None else np.atleast_1d(np.asarray(indices, dtype=np.int64))
+        seeds = [None] * len(idx) if seeds is None else list(seeds)
+        if len(seeds) != len(idx):
+            raise ValueError(f"reset: {len(seeds)} seeds for {len(idx)} formations")
+        wind = self._reset_options(options, len(idx))
+        sc, rnd, v, s = self.scenario, self.config.randomisation, self.n_vehicles, self.state
+        field_seeds = []
+        start = sc.start_position_ned()
+        for i, seed in zip(idx, seeds):
+            rng = np.random.default_rng(seed)
+            state = np.repeat(self.trim.state, v, axis=0)
+            state[:, POS] = start
+            jitter = np.zeros((v, 3))
+            if v > 1 and rnd.slot_offset_b > 0:
+                jitter[1:] = rng.normal(0.0, rnd.slot_offset_b * AEROSONDE_SPAN_M, (v - 1, 3))
+            s.slot_jitter[i] = jitter
+            state[1:, POS] += track_frame_offset_to_ned(jitter[1:], 0.0)
+            if v > 1 and rnd.initial_offset_m > 0:
+                state[1:, POS] += rng.normal(0.0, rnd.initial_offset_m, (v - 1, 3))
+            s.aircraft[i] = state
+            if rnd.steady_wind_mps > 0:
+                speed, direction = rng.uniform(0.0, rnd.steady_wind_mps), rng.uniform(-math.pi, math.pi)
+                s.steady_wind[i] = [speed * math.cos(direction), speed * math.sin(direction), 0.0]
+            else:
+                s.steady_wind[i] = 0.0
+            if rnd.crosswind_mps > 0:  # the reference flies north at the start: east is the crosswind
+                s.steady_wind[i, 1] += rng.uniform(-rnd.crosswind_mps, rnd.crosswind_mps)
+            s.manoeuvre[i] = 0.0
+            if rnd.any_manoeuvre:
+                s.manoeuvre[i] = [rng.uniform(0.0, 0.5 * self.duration_s),
+                                  math.radians(rng.uniform(-rnd.leader_turn_deg, rnd.leader_turn_deg)),
+                                  rng.uniform(-rnd.leader_climb_m, rnd.leader_climb_m),
+                                  rng.uniform(-rnd.leader_speed_mps, rnd.leader_speed_mps)]
+            s.reference_position[i] = sc.reference(0.0)[0]
+            if rnd.turbulence_sigma_mps > 0:
+                field_seeds.append(int(rng.integers(2**63 - 1)))
+            s.controller[i] = 0.0
+            s.controller[i, :, 6] = state[:, 5]  # the washout filter starts settled on the yaw rate
+            s.step[i] = 0
+            s.induced_wind_ned[i] = 0.0
+            s.induced_omega_body[i] = 0.0
+            s.circulation[i] = 0.0
+            s.status[i] = 0
+            s.command[i] = self.trim.controls[0, :4]
+            s.previous_action[i] = 0.0
+            s.episode_return[i] = 0.0
+            s.episode_decisions[i] = 0
+            s.gust_ned[i] = 0.0
+        if wind is not None:
+            s.steady_wind[idx] = wind
+        if field_seeds:
+            frozen_field_reset(self.params.field, s.field, idx, field_seeds)
+        refresh(self.params, s, idx, self.output)
+        # the slot error the step measures (formation_env.sim.observe.slot_error): slot-frame components of
+        # position minus demand, weighted by the scenario's axes (along-track only with a safe box); the
+        # infos at reset report the same quantity as after a step
+        err = s.aircraft[idx][..., POS] - s.position_demand[idx]
+        chi = np.arctan2(s.velocity_demand[idx, 0, 1], s.velocity_demand[idx, 0, 0])[:, None]
+        s.previous_error[idx] = np.linalg.norm(self.params.reward.slot_error_axes * ned_to_track_frame(err, chi), axis=-1)
+        o = self.output
+        o.slot_error_m[idx] = s.previous_error[idx]
+        o.separation_m[idx] = np.stack([separation_each(s.aircraft[i]) for i in idx])
+        o.min_separation_m[idx] = o.separation_m[idx].min(axis=1)
+        o.collided[idx] = False
+        o.crashed[idx] = False
+        o.saving[idx] = 0.0
+        o.reward[idx] = 0.0
+        o.reward_terms[idx] = 0.0
+        o.box_depth_m[idx] = 0.0
+        self._reset_once[idx] = True
+        return self._result()
+
+    def _reset_options(self, options, n: int):
+        if options is None:
+            return None
+        if not isinstance(options, dict):
+            raise ValueError(f"reset options must be a dict or None, got {type(options).__name__}")
+        unknown = sorted(set(options) - set(RESET_OPTIONS))
+        if unknown:
+            raise TypeError(f"unknown reset option {unknown[0]!r}; reset options: {list(RESET_OPTIONS)}")
+        wind = options.get("steady_wind_ned")
+        if wind is None:
+            return None
+        w = np.asarray(wind, dtype=float)
+        if w.shape not in ((3,), (n, 3)) or not np.all(np.isfinite(w)) or np.any(np.abs(w) > 50.0):
+            raise ValueError(f"reset option steady_wind_ned must be finite m/s NED within +-50 m/s, shape (3,) or "
+                             f"({n}, 3), got {wind!r}")
+        return w
+
+    def step(self, actions=None) -> SimOutput:
+        """One decision of every formation: ``actions`` (B, A, 4) in [-1, 1] for the agents (validated by the
+        caller: the adapters check shape and finiteness), None for zeros."""
+        if not self._reset_once.all():
+            raise RuntimeError(f"step() before reset(): formation(s) {np.nonzero(~self._reset_once)[0].tolist()} "
+                               "were never reset")
+        if actions is not None:
+            self._actions[:, self.agent_mask] = actions
+        step(self.params, self.state, self._actions, self.output)
+        return self._result()
+
+    def observe(self) -> np.ndarray:
+        """Recompute demands, turbulence sample and observations (B, V, D) at the current state."""
+        return observe(self.params, self.state, self.output)
+
+    def _result(self) -> SimOutput:
+        o = self.output
+        return SimOutput(o.observation, o.reward, o.terminated, o.truncated, self.info)
+
+    # ------------------------------------------------------------------ per-formation infos
+    def infos(self, i: int) -> list[dict]:
+        """Per-vehicle info dicts of formation ``i`` (the adapters' infos).
+
+        Flat: every value is a Python scalar or a numpy array, and the keys are the same at reset and
+        after every step (TorchRL builds its info specs from the reset infos). The reward's terms are
+        ``reward_<term>`` (:data:`INFO_REWARD_KEYS`; 0.0 at reset)."""
+        s, out = self.state, self.output
+        err_vec = s.aircraft[i, :, POS] - s.position_demand[i]
+        separation = separation_each(s.aircraft[i], out.separation_m[i])
+        terms = out.reward_terms[i]
+        # a formation whose state is finite has finite infos (they derive from it): check once
+        clean = bool(np.isfinite(s.aircraft[i]).all())
+        t = float(s.step[i] * self.dt)
+        result = []
+        for v in range(self.n_vehicles):
+            info = {
+                "time_s": t,
+                "slot_error_m": float(out.slot_error_m[i, v]),
+                "slot_error_ned_m": err_vec[v].copy(),
+                "min_separation_m": float(separation[v]),
+                "induced_wind_ned_mps": s.induced_wind_ned[i, v].copy(),
+                "induced_omega_body_rad_s": s.induced_omega_body[i, v].copy(),
+                "fuel_kg": float(s.aircraft[i, v, 13]),
+                "gust_ned_mps": s.gust_ned[i, v].copy(),
+                "status": int(s.status[i, v]),
+                "collision": bool(out.collided[i]),
+                "crashed": bool(out.crashed[i, v]),
+                "command": s.command[i, v].copy(),
+            }
+            if self.benefit_enabled:
+                info["induced_drag_saving"] = float(out.saving[i, v])
+            info["box_depth_m"] = float(out.box_depth_m[i, v])
+            for j, key in enumerate(INFO_REWARD_KEYS[:-1]):
+                info[key] = float(terms[v, j])
+            info[INFO_REWARD_KEYS[-1]] = float(out.reward[i, v])
+            if not clean:
+                _finite_values(info)
+            result.append(info)
+        return result
+
+    # ------------------------------------------------------------------ read-only views (B, V, ...)
+    @property
+    def aircraft(self) -> np.ndarray:
+        """(B, V, 16) Aerosonde states (formation_env.aircraft.state layout)."""
+        return self.state.aircraft
+
+    @property
+    def induced(self) -> np.ndarray:
+        return self.state.induced_wind_ned
+
+    @property
+    def omega(self) -> np.ndarray:
+        return self.state.induced_omega_body
+
+    @property
+    def commands(self) -> np.ndarray:
+        return self.state.command
+
+    @property
+    def position_demand(self) -> np.ndarray:
+        """(B, V, 3) demanded positions at the current state and time, m NED."""
+        return self.state.position_demand
+
+    @property
+    def velocity_demand(self) -> np.ndarray:
+        """(B, V, 3) demanded ground velocities, m/s NED."""
+        return self.state.velocity_demand
+
+    @property
+    def time_s(self) -> np.ndarray:
+        """(B,) episode time, s."""
+        return self.state.step * self.dt
+
+    def velocity_ned(self) -> np.ndarray:
+        """(B, V, 3) ground velocities, m/s NED."""
+        from ..frames import dcm_body_to_ned_from_quaternion
+
+        x = self.state.aircraft
+        return np.einsum("...ij,...j->...i", dcm_body_to_ned_from_quaternion(x[..., 6:10]), x[..., 0:3])
+
+    def ambient_wind(self) -> np.ndarray:
+        """(B, V, 3) ambient wind at each UAV now: scenario gusts + steady wind + turbulence, m/s NED."""
+        w = self.scenario.ambient_wind_ned(self.time_s) + self.state.steady_wind
+        return w[:, None, :] + self.state.gust_ned
+
+    def reward_terms(self, index: int) -> dict[str, np.ndarray]:
+        """Formation ``index``'s last reward terms, name -> (V,)."""
+        t = self.output.reward_terms[index]
+        return {**{k: t[:, j] for j, k in enumerate(REWARD_TERMS)}, "total": self.output.reward[index]}
+
+
+def separation_each(x: np.ndarray, fallback: np.ndarray | None = None) -> np.ndarray:
+    """(V,) distance from each UAV of one formation (x: (V, 16) states) to its nearest neighbour, m (inf
+    alone); never NaN.
+
+    Pairs with a non-finite position (a UAV that diverged: its episode is ending) are left out;
+    a UAV with no finite pair gets ``fallback`` (the decision step's separation at the last finite
+    positions, ``StepOutput.separation_m``) where that is not NaN, else inf."""
+    with np.errstate(invalid="ignore", over="ignore"):
+        d = np.linalg.norm(x[:, None, POS] - x[None, :, POS], axis=-1)
+    d[~np.isfinite(d)] = np.inf
+    np.fill_diagonal(d, np.inf)
+    sep = d.min(axis=1)
+    if fallback is not None and x.shape[0] > 1:
+        fb = np.asarray(fallback, dtype=float)
+        sep = np.where(~np.isfinite(sep) & ~np.isnan(fb), fb, sep)
+    return sep
+
+
+def _finite_values(info: dict) -> None:
+    """Infos never carry NaN or inf from a diverged UAV (its state is non-finite on the step that ends
+    its episode): non-finite numbers become 0.0 and non-finite array entries 0.0, except
+    ``min_separation_m``, which stays inf for a lone UAV (no neighbour)."""
+    for key, value in info.items():
+        if isinstance(value, float):
+            if not math.isfinite(value) and not (key == "min_separation_m" and value == math.inf):
+                info[key] = 0.0
+        elif isinstance(value, np.ndarray) and value.dtype.kind == "f" and not np.all(np.isfinite(value)):
+            info[key] = np.where(np.isfinite(value), value, 0.0)
