@@ -76,7 +76,8 @@ class ExtremumSeekingGains:
 
 
 class ExtremumSeeking:
-    """Batched, stateful: ``reset(n_rows)`` then ``act(obs (n_rows, D), saving (n_rows,)) -> (n_rows, 4)``
+    """Batched, stateful (the :class:`formation_env.rollout.Policy` protocol, with ``observe``): ``reset(n_rows)``,
+    then per decision ``observe(decision)`` (the measured saving) and ``act(obs (n_rows, D)) -> (n_rows, 4)``
     set-point actions in [-1, 1]. ``setpoint_low_m`` / ``setpoint_high_m`` (3,) are the env's set-point
     ranges (:func:`formation_env.sim.params.setpoint_ranges`), ``speed_range_mps`` its speed range
     (:func:`formation_env.sim.params.setpoint_speed_range`). ``centre_m`` (n_rows, 2) is the set-point
@@ -106,6 +107,7 @@ class ExtremumSeeking:
         if isinstance(n_rows, bool) or not isinstance(n_rows, (int, np.integer)) or n_rows < 1:
             raise ValueError(f"ExtremumSeeking.reset: n_rows must be an integer >= 1, got {n_rows!r}")
         n = int(n_rows)
+        self._saving = None
         self.t_s = np.zeros(n)
         self.centre_m = np.zeros((n, 2))
         self.washout = np.full(n, np.nan)  # the high-pass filter's low-passed saving (NaN: not started)
@@ -127,8 +129,19 @@ class ExtremumSeeking:
         return np.stack([g.amplitude_y_m * np.sin(2 * np.pi * t_s / g.period_y_s),
                          g.amplitude_z_m * np.sin(2 * np.pi * t_s / g.period_z_s)], axis=1)
 
-    def act(self, obs, saving) -> np.ndarray:
+    def observe(self, decision) -> None:
+        """The rollout's step output before each decision (:class:`formation_env.rollout.Decision`): ES climbs
+        the measured saving of the previous decision (0 at the start and for ended episodes)."""
+        self._saving = np.asarray(decision.saving, dtype=float)
+
+    def act(self, obs, saving=None) -> np.ndarray:
+        """Set-point actions (N, 4); ``saving`` (N,) the last measured saving (default: the one
+        :meth:`observe` received, 0 before any)."""
         obs = np.asarray(obs, dtype=float)
+        if saving is None:
+            saving = getattr(self, "_saving", None)
+            if saving is None or saving.shape[0] != obs.shape[0]:
+                saving = np.zeros(obs.shape[0])
         j = np.nan_to_num(np.asarray(saving, dtype=float).reshape(-1))
         if obs.ndim != 2 or obs.shape[0] != j.shape[0]:
             raise ValueError(f"ExtremumSeeking.act: obs (N, D) and saving (N,) must agree, got {obs.shape} and {j.shape}")

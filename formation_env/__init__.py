@@ -1,12 +1,15 @@
 """formation-env: close-formation UAV flight simulation for reinforcement learning.
 
 Layers (imports point down only): ``geometry`` -> ``wake`` (ELL) -> ``aircraft`` (Aerosonde
-6-DOF) -> ``sim`` -> ``envs``. ``import formation_env`` registers the Gymnasium ids
+6-DOF) -> ``sim`` (the public :class:`~formation_env.sim.Simulation`) -> ``tasks`` -> ``rollout`` -> ``envs``
+(docs/architecture.md). ``import formation_env`` registers the Gymnasium ids
 (``formation_env/FormationKeeping-v0`` ...); ``formation_env.parallel_env(...)`` and
 ``formation_env.env(...)`` give the PettingZoo environments. See README.md.
 """
 
 __version__ = "0.1.0"
+
+from . import tasks as _tasks  # noqa: E402,F401  registers every task and its scenario (formation_env.tasks)
 
 
 def parallel_env(scenario: str = "formation_keeping", render_mode=None, **options):

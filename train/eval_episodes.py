@@ -4,9 +4,12 @@ per-episode metric (the table in :mod:`train.evaluate`)."""
 from __future__ import annotations
 
 import dataclasses
-from collections.abc import Callable, Sequence
+from collections.abc import Sequence
 
 import numpy as np
+
+from formation_env.rollout import Recorder
+from formation_env.tasks.wake_surfing.metrics import longest_run
 
 __all__ = ["eval_env_config", "run_episodes", "longest_run", "SPAN_M", "SUCCESS_WINDOW_S"]
 
@@ -21,10 +24,10 @@ def eval_env_config(scenario: str, action_mode: str, *, turbulence_sigma_mps: fl
     """The evaluation episodes' EnvConfig: the thesis scenario with wake and Dryden turbulence on. With
     its defaults (sigma 1 m/s, wake on, the scenario's duration, no other randomisation) it is the test
     set's distribution, which the training's validation (model selection) also uses. A scenario with a
-    task preset (:mod:`formation_env.envs.tasks`: ``wake_surfing``) keeps its preset's randomisation and
+    task preset (:mod:`formation_env.tasks`: ``wake_surfing``) keeps its preset's randomisation and
     reward, with the benefit on, at ``turbulence_sigma_mps`` (None: the preset's level)."""
     from formation_env.envs.config import EnvConfig, Randomisation
-    from formation_env.envs.tasks import task_options
+    from formation_env.tasks import task_options
 
     task = task_options(scenario)
     if task:  # a task preset (wake_surfing): its randomisation, reward and benefit, with this turbulence
@@ -47,80 +50,75 @@ def _moving_slot(scenario) -> bool:
     return any(len(s.keyframes) > 1 for s in scenario.slots)
 
 
-def run_episodes(act: Callable[[np.ndarray], np.ndarray], config, seeds: Sequence[int], *,
-                 keep_series: bool = False, reset: Callable[[int], None] | None = None) -> list[dict]:
-    """Fly one episode per seed (all in one batch) and return the per-episode metrics. ``reset`` (a
-    stateful policy's) is called once with the number of observation rows, formations x learning
-    UAVs, before the first decision."""
-    from formation_env.control.observation import slot_demand
-    from formation_env.envs.core import FormationCore
-    from formation_env.envs.rewards import min_separation_m, slot_error_m
+class _EpisodeSeries(Recorder):
+    """The per-decision series the metrics below are computed from (NaN once a formation's episode ended)."""
+
+    def __init__(self, config) -> None:
+        self.hz = config.control_hz
+
+    def start(self, sim, out) -> None:
+        sc = sim.scenario
+        self.agents = list(sim.agent_indices)
+        b, a_n = sim.batch_size, len(self.agents)
+        self.series = {k: [] for k in ("t", "err", "sep", "act", "cmd", "saving", "final_err", "box")}
+        self.returns = np.zeros(b)
+        self.fuel0 = sim.aircraft[:, :, 13].copy()
+        self.fuel_end = self.fuel0.copy()
+        self.moving = _moving_slot(sc)
+        self.final_offsets = [np.asarray(s.offset_and_rate(sim.duration_s)[0]) for s in sc.slots]
+        self.shape = (b, a_n)
+
+    def after_step(self, sim, out, act_now, alive, k) -> None:
+        from formation_env.control.observation import slot_demand
+        from formation_env.envs.rewards import min_separation_m, slot_error_m
+
+        agents, series, (b, a_n) = self.agents, self.series, self.shape
+        with np.errstate(all="ignore"):
+            err = slot_error_m(sim.aircraft, sim.position_demand)[:, agents]
+            sep = min_separation_m(sim.aircraft)[:, agents]
+        series["t"].append(k / self.hz)
+        series["err"].append(np.where(alive[:, None], err, np.nan))
+        series["sep"].append(np.where(alive[:, None], sep, np.nan))
+        series["act"].append(np.where(alive[:, None, None], act_now, np.nan))
+        series["cmd"].append(np.where(alive[:, None, None], sim.commands[:, agents], np.nan))
+        series["saving"].append(np.where(alive[:, None], out.info.induced_drag_saving[:, agents], np.nan))
+        series["box"].append(np.where(alive[:, None], out.info.box_depth_m[:, agents], np.nan))
+        if self.moving:
+            fe = np.full((b, a_n), np.nan)
+            vd0 = sim.velocity_demand[:, 0]
+            chi = np.arctan2(vd0[:, 1], vd0[:, 0])
+            vel0 = sim.velocity_ned()[:, 0]
+            for j, v in enumerate(agents):
+                if v == 0:
+                    continue
+                p, _ = slot_demand(sim.aircraft[:, 0, 10:13], vel0, self.final_offsets[v - 1] + sim.state.slot_jitter[:, v],
+                                   None, track_angle_rad=chi)
+                fe[:, j] = np.linalg.norm(sim.aircraft[:, v, 10:13] - p, axis=-1)
+            series["final_err"].append(np.where(alive[:, None], fe, np.nan))
+        self.returns[alive] += out.reward[alive][:, agents].mean(axis=1)
+
+    def ended(self, sim, out, formations, k) -> None:
+        self.fuel_end[formations] = sim.aircraft[formations, :, 13]
+
+
+def run_episodes(policy, config, seeds: Sequence[int], *, keep_series: bool = False) -> list[dict]:
+    """Fly one episode per seed (all in one batch) with ``policy`` (the :class:`formation_env.rollout.Policy`
+    protocol) and return the per-episode metrics (the module's table)."""
+    from formation_env.rollout import rollout
+    from formation_env.sim import Simulation
 
     seeds = [int(s) for s in seeds]
     if not seeds:
         raise ValueError("seeds must not be empty")
-    core = FormationCore(config, batch_size=len(seeds))
-    core.reset(None, seeds)
-    eng = core.engine
-    sc = eng.scenario
-    agents = list(core.agent_indices)
-    b, a_n = len(seeds), len(agents)
-    alive = np.ones(b, dtype=bool)
-    series = {k: [] for k in ("t", "err", "sep", "act", "cmd", "saving", "final_err", "box")}
+    sim = Simulation(config, batch_size=len(seeds))
+    rec = _EpisodeSeries(config)
+    res = rollout(sim, policy, seeds, recorders=[rec])
+    sc, agents = sim.scenario, rec.agents
+    b, a_n = rec.shape
     has_box = sc.safe_box_b is not None
-    end_step = np.zeros(b, dtype=np.int64)
-    returns = np.zeros(b)
-    collided = np.zeros(b, dtype=bool)
-    crashed = np.zeros(b, dtype=bool)
-    fuel0 = eng.state[:, :, 13].copy()
-    fuel_end = fuel0.copy()
-    moving = _moving_slot(sc)
-    duration = eng.duration_s
-    final_offsets = [np.asarray(s.offset_and_rate(duration)[0]) for s in sc.slots]
-    trim = eng.trim.controls[0, :4]
-    if reset is not None:
-        reset(b * a_n)
-    k = 0
-    while alive.any():
-        obs = core.observations()[:, agents].reshape(b * a_n, -1).astype(np.float32)
-        act_now = np.clip(np.asarray(act(obs), dtype=float).reshape(b, a_n, 4), -1.0, 1.0)
-        act_now[~alive] = 0.0
-        with np.errstate(all="ignore"):
-            rewards, term, trunc = core.step(act_now)
-            err = slot_error_m(eng.state, eng.position_demand_now())[:, agents]
-            sep = min_separation_m(eng.state)[:, agents]
-        k += 1
-        series["t"].append(k / config.control_hz)
-        series["err"].append(np.where(alive[:, None], err, np.nan))
-        series["sep"].append(np.where(alive[:, None], sep, np.nan))
-        series["act"].append(np.where(alive[:, None, None], act_now, np.nan))
-        series["cmd"].append(np.where(alive[:, None, None], eng.commands[:, agents], np.nan))
-        series["saving"].append(np.where(alive[:, None], core.last_saving[:, agents], np.nan))
-        series["box"].append(np.where(alive[:, None], eng.out.box_depth_m[:, agents], np.nan))
-        if moving:
-            fe = np.full((b, a_n), np.nan)
-            vd0 = eng.velocity_demand[:, 0]
-            chi = np.arctan2(vd0[:, 1], vd0[:, 0])
-            vel0 = eng.velocity_ned()[:, 0]
-            for j, v in enumerate(agents):
-                if v == 0:
-                    continue
-                p, _ = slot_demand(eng.state[:, 0, 10:13], vel0, final_offsets[v - 1] + eng.slot_jitter[:, v], None,
-                                   track_angle_rad=chi)
-                fe[:, j] = np.linalg.norm(eng.state[:, v, 10:13] - p, axis=-1)
-            series["final_err"].append(np.where(alive[:, None], fe, np.nan))
-        returns[alive] += rewards[alive][:, agents].mean(axis=1)
-        done = (term | trunc) & alive
-        if done.any():
-            idx = np.nonzero(done)[0]
-            collided[idx] = core.collided[idx]
-            crashed[idx] = core.crashed[idx].any(axis=1)
-            fuel_end[idx] = eng.state[idx, :, 13]
-            end_step[idx] = k
-            alive &= ~done
-            early = idx[term[idx]]
-            if len(early) and alive.any():  # restart crashed formations so the batch stays finite
-                core.reset(early, [seeds[i] for i in early])
+    series, returns, fuel0, fuel_end, moving = rec.series, rec.returns, rec.fuel0, rec.fuel_end, rec.moving
+    end_step, collided, crashed = res.decisions, res.collided, res.crashed
+    trim = sim.trim.controls[0, :4]
     t = np.asarray(series["t"])
     err = np.stack(series["err"])          # (T, B, A)
     sep = np.stack(series["sep"])
@@ -152,7 +150,7 @@ def run_episodes(act: Callable[[np.ndarray], np.ndarray], config, seeds: Sequenc
             "leader_fuel_kg": float(fuel0[i, 0] - fuel_end[i, 0]),
         }
         m["fuel_saving_pct"] = float(100.0 * (1.0 - m["fuel_used_kg"] / m["leader_fuel_kg"])) if m["leader_fuel_kg"] > 0 else float("nan")
-        if core.benefit_enabled:
+        if sim.benefit_enabled:
             m["induced_drag_saving"] = float(np.mean(saving[:n, i]))
         if has_box:
             out_of_box = box[:n, i] > 0.0  # (T, A)
@@ -161,7 +159,7 @@ def run_episodes(act: Callable[[np.ndarray], np.ndarray], config, seeds: Sequenc
             m["box_depth_max_m"] = float(np.max(box[:n, i]))
         if moving:
             fe = final_err[:n, i]
-            ok = not (m["collision"] or m["crashed"]) and n >= round(eng.duration_s * config.control_hz)
+            ok = not (m["collision"] or m["crashed"]) and n >= round(sim.duration_s * config.control_hz)
             window = t[:n] > t[n - 1] - SUCCESS_WINDOW_S
             m["reconfig_success"] = bool(ok and np.all(fe[window] < SPAN_M))
             outside = np.nonzero(np.any(fe >= SPAN_M, axis=1))[0]
@@ -173,18 +171,9 @@ def run_episodes(act: Callable[[np.ndarray], np.ndarray], config, seeds: Sequenc
         out.append(m)
     if keep_series:
         for i, m in enumerate(out):
-            if core.benefit_enabled:
+            if sim.benefit_enabled:
                 m["saving_series"] = saving[:end_step[i], i].mean(axis=1).tolist()
         for i, m in enumerate(out):
             n = end_step[i]
             m["series"] = {"t": t[:n].tolist(), "slot_error_m": err[:n, i].mean(axis=1).tolist()}
     return out
-
-
-def longest_run(flags: np.ndarray) -> int:
-    """Length of the longest run of True in a 1-D bool array."""
-    best = run = 0
-    for f in flags:
-        run = run + 1 if f else 0
-        best = max(best, run)
-    return best

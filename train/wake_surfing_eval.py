@@ -28,7 +28,7 @@ from pathlib import Path
 import numpy as np
 
 from .config import TEST_SEED_BASE
-from .stats import N_BOOT, bootstrap_ci, paired_comparison, wilson_interval
+from .evaluation.stats import N_BOOT, bootstrap_ci, paired_comparison, wilson_interval
 from .wake_surfing_rollout import es_surfer, fly, oracle_surfer, pid_formation_surfer, pid_surfer, sb3_surfer
 
 __all__ = ["evaluate_wake_surfing", "summarise_surfer", "paired_gain", "tune_es", "plot_surfing_figure", "main"]
@@ -202,7 +202,7 @@ def plot_surfing_figure(path, policy_zip: str, *, es_gains=None, crosswind_mps: 
     from formation_env.envs.config import Randomisation
     from formation_env.io import save_figure
     from formation_env.scenarios import get_scenario
-    from formation_env.verification.wake_surfing import reference_optimum, saving_in_crosswind
+    from formation_env.tasks.wake_surfing.optimum import reference_optimum, saving_in_crosswind
 
     from .eval_episodes import eval_env_config
 

@@ -95,37 +95,31 @@ def _progress(enabled: bool | None, total: int, desc: str):
 
 
 def _fly_policy(policy, scenario: str, *, seed: int, wake: bool, turbulence: float, duration_s):
-    """One evaluation episode of ``policy`` (an EvalPolicy) recorded at the decision rate."""
-    import numpy as np
-
+    """One evaluation episode of ``policy`` (the rollout's Policy protocol) recorded at the decision rate."""
     from train.eval_episodes import eval_env_config
 
-    from ..envs.core import FormationCore
     from ..replay import EpisodeRecorder
+    from ..rollout import Recorder, rollout
+    from ..sim import Simulation
+
+    class _Replay(Recorder):
+        def start(self, sim, out) -> None:
+            self.log = EpisodeRecorder(sim)
+            self.log.record()
+
+        def after_step(self, sim, out, actions, alive, k) -> None:
+            self.log.record()
 
     cfg = eval_env_config(scenario, policy.action_mode, turbulence_sigma_mps=turbulence, wake=wake,
                           control_hz=policy.control_hz, duration_s=duration_s)
-    core = FormationCore(cfg, batch_size=1)
-    core.reset(None, [seed])
-    agents = list(core.agent_indices)
-    if policy.reset is not None:
-        policy.reset(len(agents))
-    rec = EpisodeRecorder(core.engine)
-    rec.record()
+    sim = Simulation(cfg, batch_size=1)
+    rec = _Replay()
+    res = rollout(sim, policy, [seed], recorders=[rec])
     status = "completed"
-    while True:
-        obs = core.observations()[:, agents].reshape(len(agents), -1).astype(np.float32)
-        act = np.clip(np.asarray(policy.act(obs), dtype=float).reshape(1, len(agents), 4), -1.0, 1.0)
-        with np.errstate(all="ignore"):
-            _, term, trunc = core.step(act)
-        rec.record()
-        if term[0]:
-            what = "collision" if bool(core.collided[0]) else "a UAV left the envelope"
-            status = f"terminated at t = {float(np.asarray(core.engine.time_s)[0]):.2f} s ({what})"
-            break
-        if trunc[0]:
-            break
-    log = rec.log()
+    if res.terminated[0]:
+        what = "collision" if bool(res.collided[0]) else "a UAV left the envelope"
+        status = f"terminated at t = {float(sim.time_s[0]):.2f} s ({what})"
+    log = rec.log.log()
     log.meta.update({"wake": wake, "status": status, "policy": policy.name, "seed": seed,
                      "turbulence_sigma_mps": turbulence})
     return log, status
@@ -138,7 +132,7 @@ def _trained_scenario(path, zip_metadata) -> str | None:
         return zip_metadata(path).get("scenario")
     if not path.is_dir():
         return None
-    from train.rllib_checkpoints import CHECKPOINT_META, latest_rllib_checkpoint
+    from train.rllib.checkpoints import CHECKPOINT_META, latest_rllib_checkpoint
 
     meta = path / CHECKPOINT_META
     if not meta.is_file():
@@ -165,7 +159,7 @@ def run(args) -> int:
     pol = None
     if learned:
         try:
-            from train.policy_loader import _policy_metadata, load_policy
+            from train.evaluation.policy_loader import _policy_metadata, load_policy
         except ModuleNotFoundError as exc:
             raise ValueError(f"--policy {policy_spec!r} needs the RL extra ({exc}); pip install -e '.[rl]'") from None
         from pathlib import Path

@@ -26,22 +26,14 @@ import gymnasium as gym
 import numpy as np
 
 from .config import EnvConfig
-from .parallel import FormationParallelEnv, make_config
+from ..tasks import make_config
+from .parallel import FormationParallelEnv
 
-from .tasks import task_options
+from ..tasks import gym_ids, task_options
 
 __all__ = ["FormationGymEnv", "GYM_IDS", "register_envs"]
 
-GYM_IDS = {
-    "formation_env/FormationKeeping-v0": ("formation_keeping", 1),
-    "formation_env/Reconfiguration-v0": ("reconfiguration", 1),
-    "formation_env/Gust-v0": ("gust", 0),
-    "formation_env/Tracking-v0": ("tracking", 0),
-    "formation_env/Echelon-v0": ("echelon", 1),
-    "formation_env/Vee-v0": ("vee", 1),
-    "formation_env/CloseFormation-v0": ("close_formation", 1),
-    "formation_env/WakeSurfing-v0": ("wake_surfing", 1),
-}
+GYM_IDS = gym_ids()  # id -> (scenario, learner), one per registered task (formation_env.tasks)
 
 
 def _default_learner(n_vehicles: int) -> int:

@@ -21,33 +21,11 @@ from gymnasium import spaces
 from pettingzoo import ParallelEnv
 
 from ..sim import Simulation
+from ..tasks import make_config
 from .config import EnvConfig
 from .observations import OBS_CLIP, group_sizes, observation_size, to_dict
 
 __all__ = ["FormationParallelEnv", "make_config"]
-
-
-def make_config(config: EnvConfig | None = None, **options) -> EnvConfig:
-    """An EnvConfig from keyword options.
-
-    An unknown option raises ``TypeError`` naming it (as Python does for an unexpected keyword argument;
-    wrappers such as TorchRL's ``GymEnv`` probe constructors with optional keywords and expect
-    ``TypeError``); a bad value of a known option raises ``ValueError`` (from :class:`EnvConfig`)."""
-    valid = set(EnvConfig.__dataclass_fields__)
-    unknown = sorted(set(options) - valid)
-    if unknown:
-        more = f" (and {unknown[1:]})" if len(unknown) > 1 else ""
-        raise TypeError(f"unknown option: got an unexpected keyword argument {unknown[0]!r}{more}; "
-                        f"valid options: {sorted(valid)}")
-    if config is not None and not isinstance(config, EnvConfig):
-        raise ValueError(f"config must be an EnvConfig, got {type(config).__name__}")
-    if config is None:
-        from .tasks import task_options
-
-        return EnvConfig(**{**task_options(options.get("scenario", "formation_keeping")), **options})
-    if options:
-        raise ValueError("give either config or keyword options, not both")
-    return config
 
 
 class FormationParallelEnv(ParallelEnv):

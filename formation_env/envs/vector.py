@@ -29,7 +29,7 @@ from stable_baselines3.common.vec_env.base_vec_env import VecEnv
 from ..sim import Simulation
 from .config import EnvConfig
 from .observations import OBS_CLIP
-from .parallel import make_config
+from ..tasks import make_config
 
 __all__ = ["FormationVecEnv", "FormationVectorEnv", "BatchedFormations"]
 

@@ -27,6 +27,7 @@ from ..atmosphere.wind import WindInput
 from ..control.observation import fcs_observation
 from ..control.tracker import track_errors
 from ..sim import WakeConfig
+from ..rollout import Recorder, ZeroPolicy, rollout
 from ..scenarios import Scenario, get_scenario
 
 __all__ = ["ScenarioRun", "run_scenario", "scenario_metrics", "run_scenario_to_dir", "MAX_DURATION_S"]
@@ -61,42 +62,54 @@ def run_scenario(scenario: str | Scenario, wake: bool | None = None, duration_s:
         raise ValueError(f"duration_s must be in (0, {MAX_DURATION_S:g}] s, got {duration_s!r}")
     if duration_s is not None and duration_s < sc.dt:
         raise ValueError(f"duration_s {duration_s!r} is shorter than one step of {sc.name!r} ({sc.dt:g} s)")
-    # every UAV PID-flown (no agents), one physics step per decision
-    eng = Simulation(EnvConfig(scenario=sc, wake=wake, duration_s=duration_s, control_hz=1.0 / sc.dt), 1, agents=(),
-                     wake_config=wake_config)
-    eng.reset(seeds=[0])  # nothing is randomised: the seed is not used
-    n_steps, v = eng.n_steps, sc.n_vehicles
-    names3 = ("position_ned", "velocity_ned", "euler", "rates_body", "controls", "induced_wind_ned",
-              "induced_omega_body", "position_demand_ned", "ambient_wind_ned")
-    h = {k: np.full((n_steps, v, 4 if k == "controls" else 3), np.nan) for k in names3}
-    for k in ("airspeed", "alpha", "beta", "along_track", "off_track", "altitude_error", "track_angle", "status"):
-        h[k] = np.full((n_steps, v), np.nan)
-    time = np.arange(n_steps) * sc.dt
+    # every UAV PID-flown (no agents), one physics step per decision; a collision does not end the run (the
+    # thesis's runs measure the separation instead), an envelope exit does
+    sim = Simulation(EnvConfig(scenario=sc, wake=wake, duration_s=duration_s, control_hz=1.0 / sc.dt,
+                               collision_separation_b=0.0), 1, agents=(), wake_config=wake_config)
+    rec = _HistoryRecorder(sim)
+    res = rollout(sim, ZeroPolicy(), [0], recorders=[rec])  # nothing is randomised: the seed is not used
+    n = int(res.decisions[0])
+    time, h = np.arange(n) * sc.dt, {key: val[:n] for key, val in rec.h.items()}
     completed, message = True, "completed"
-    for k in range(n_steps):
-        t = k * sc.dt
-        state, amb = eng.aircraft[0].copy(), eng.ambient_wind()[0]
-        obs = fcs_observation(state, np.zeros(3), np.zeros(3), WindInput(wind_ned=amb + eng.induced[0]))
-        pd, vd = eng.position_demand[0].copy(), eng.velocity_demand[0].copy()  # the demands of this step
-        eng.step()
-        cmd, induced, status = eng.commands[0], eng.induced[0], eng.state.status[0]
+    if res.terminated[0]:
+        status = h["status"][-1].astype(np.int64)
+        completed = False
+        bad = int(np.nonzero(status)[0][0])
+        message = f"vehicle {bad} left the envelope at t = {n * sc.dt:.2f} s ({describe_status(status[bad])})"
+    return ScenarioRun(sc, wake, time, h, completed, message)
+
+
+class _HistoryRecorder(Recorder):
+    """The run's time histories, sampled at the start of each physics step (the controls and the induced
+    wind: those the step applied), into arrays (T, V, ...) preallocated for the full duration."""
+
+    def __init__(self, sim) -> None:
+        n_steps, v = sim.n_steps, sim.n_vehicles
+        names3 = ("position_ned", "velocity_ned", "euler", "rates_body", "controls", "induced_wind_ned",
+                  "induced_omega_body", "position_demand_ned", "ambient_wind_ned")
+        self.h = {k: np.full((n_steps, v, 4 if k == "controls" else 3), np.nan) for k in names3}
+        for k in ("airspeed", "alpha", "beta", "along_track", "off_track", "altitude_error", "track_angle", "status"):
+            self.h[k] = np.full((n_steps, v), np.nan)
+
+    def before_step(self, sim, alive, k) -> None:
+        state, amb = sim.aircraft[0].copy(), sim.ambient_wind()[0]
+        self._pre = (state, amb, fcs_observation(state, np.zeros(3), np.zeros(3), WindInput(wind_ned=amb + sim.induced[0])),
+                     sim.position_demand[0].copy(), sim.velocity_demand[0].copy())  # the demands of this step
+
+    def after_step(self, sim, out, actions, alive, k) -> None:
+        h, i = self.h, k - 1
+        state, amb, obs, pd, vd = self._pre
+        cmd, induced, status = sim.commands[0], sim.induced[0], sim.state.status[0]
         ad = air_data_of(state, WindInput(wind_ned=amb + induced))
         atd, otd, _, _ = track_errors(obs["position_ned"], obs["velocity_ned"], pd, vd)
-        h["position_ned"][k], h["velocity_ned"][k], h["euler"][k] = obs["position_ned"], obs["velocity_ned"], obs["euler"]
-        h["rates_body"][k], h["controls"][k], h["induced_wind_ned"][k] = obs["rates_body"], cmd, induced
-        h["induced_omega_body"][k], h["position_demand_ned"][k], h["ambient_wind_ned"][k] = eng.omega[0], pd, amb
-        h["airspeed"][k], h["alpha"][k], h["beta"][k] = ad["airspeed_raw"], ad["alpha_raw"], ad["beta_raw"]
-        h["along_track"][k], h["off_track"][k] = atd, otd
-        h["altitude_error"][k] = -(obs["position_ned"][:, 2] - pd[:, 2])
-        h["track_angle"][k] = np.arctan2(obs["velocity_ned"][:, 1], obs["velocity_ned"][:, 0])
-        h["status"][k] = status
-        if np.any(status != 0):
-            completed = False
-            bad = int(np.nonzero(status)[0][0])
-            message = f"vehicle {bad} left the envelope at t = {t + sc.dt:.2f} s ({describe_status(status[bad])})"
-            time, h = time[:k + 1], {key: val[:k + 1] for key, val in h.items()}
-            break
-    return ScenarioRun(sc, wake, time, h, completed, message)
+        h["position_ned"][i], h["velocity_ned"][i], h["euler"][i] = obs["position_ned"], obs["velocity_ned"], obs["euler"]
+        h["rates_body"][i], h["controls"][i], h["induced_wind_ned"][i] = obs["rates_body"], cmd, induced
+        h["induced_omega_body"][i], h["position_demand_ned"][i], h["ambient_wind_ned"][i] = sim.omega[0], pd, amb
+        h["airspeed"][i], h["alpha"][i], h["beta"][i] = ad["airspeed_raw"], ad["alpha_raw"], ad["beta_raw"]
+        h["along_track"][i], h["off_track"][i] = atd, otd
+        h["altitude_error"][i] = -(obs["position_ned"][:, 2] - pd[:, 2])
+        h["track_angle"][i] = np.arctan2(obs["velocity_ned"][:, 1], obs["velocity_ned"][:, 0])
+        h["status"][i] = status
 
 
 def _rms(x) -> float:

@@ -18,7 +18,8 @@ import numpy as np
 
 from ..atmosphere.gust import TransientGust, thesis_gust_20s, thesis_gust_40s
 
-__all__ = ["AEROSONDE_SPAN_M", "SlotSchedule", "Scenario", "SCENARIOS", "get_scenario", "scenario_names"]
+__all__ = ["AEROSONDE_SPAN_M", "SlotSchedule", "Scenario", "SCENARIOS", "get_scenario", "scenario_names",
+           "register_scenario"]
 
 AEROSONDE_SPAN_M = 2.9
 
@@ -215,40 +216,22 @@ SCENARIOS: dict[str, Scenario] = {
         "vee", "vee of 5: two echelons of 2 behind the leader, starboard and port", duration_s=60.0,
         slots=(SlotSchedule(((0.0, (-2.0, 0.9, 0.1)),)), SlotSchedule(((0.0, (-2.0, -0.9, 0.1)),)),
                SlotSchedule(((0.0, (-4.0, 1.8, 0.2)),)), SlotSchedule(((0.0, (-4.0, -1.8, 0.2)),)))),
-    # The ELL's induced-drag optimum 2 spans behind the leader, found outside the band |z| < 0.1 b
-    # where the follower's wing meets the leader's discrete trailing legs (saving ripples with the
-    # leg spacing there): formation_env.verification.close_formation_map, its cached map
-    # formation_env/data/close_formation_map.json and docs/close_formation.md.
-    "close_formation": Scenario(
-        "close_formation", "close formation at the ELL's induced-drag optimum: follower 2 spans behind, "
-        "0.96 span starboard of and 0.1 span below the leader, just off its wake plane (36 % "
-        "induced-drag saving against 15 % at the thesis slot 1 span starboard, 0.3 span below)",
-        duration_s=60.0,
-        slots=(SlotSchedule(((0.0, (-2.0, 0.96, 0.1)),)),),
-        notes={"induced_drag_saving": 0.3645, "thesis_slot_saving": 0.1475, "z_exclusion_b": 0.1}),
-    # Wake surfing (issue 16): the follower starts in the thesis slot and may move its set-point anywhere
-    # in a safe box (1 span either side laterally; vertically from 0.8 span below the leader up to 0.1
-    # span below it, not into the band |z| < 0.1 b around the leader's wake plane where the ELL's discrete
-    # trailing legs make the saving an artefact, docs/close_formation.md). The along-track set-point is
-    # fixed (2 spans behind) and the slot cost holds it; along-track the box only keeps the follower at
-    # least 0.5 span behind the leader (and within 12): the saving hardly changes along the track
-    # (semi-infinite trailing legs), and the thesis PID's proportional along-track loop lags 8 m per
-    # 1 m/s of wind, so a tight along-track wall would be broken by the baseline itself.
-    # The energy-optimal position moves with the crosswind (the wake trails along the air-relative velocity)
-    # and with the leader's turns: formation_env.verification.wake_surfing.
-    "wake_surfing": Scenario(
-        "wake_surfing", "wake surfing: follower 2 spans behind the leader, starting in the thesis slot (1 span "
-        "starboard, 0.3 span below), free to move within a safe box (0-2 spans starboard, 0.1-0.8 span below, "
-        "behind the leader) "
-        "to the position of least induced drag", duration_s=90.0,
-        slots=(SlotSchedule(((0.0, (-2.0, 1.0, 0.3)),)),),
-        safe_box_b=((-12.0, -0.5), (0.0, 2.0), (0.1, 0.8)),
-        notes={"z_exclusion_b": 0.1}),
 }
 
 
 def scenario_names() -> list[str]:
     return list(SCENARIOS)
+
+
+def register_scenario(scenario: Scenario) -> Scenario:
+    """Add a task's scenario to the registry (:mod:`formation_env.tasks` registers its own on import);
+    a name may be registered once."""
+    if not isinstance(scenario, Scenario):
+        raise ValueError(f"register_scenario: expected a Scenario, got {type(scenario).__name__}")
+    if scenario.name in SCENARIOS and SCENARIOS[scenario.name] is not scenario:
+        raise ValueError(f"register_scenario: a scenario named {scenario.name!r} is already registered")
+    SCENARIOS[scenario.name] = scenario
+    return scenario
 
 
 def get_scenario(name: str) -> Scenario:

@@ -7,11 +7,11 @@ import pytest
 from agents.extremum_seeking import ExtremumSeeking, ExtremumSeekingGains
 from formation_env.envs.config import Randomisation
 from formation_env.envs.observations import observation_size
-from formation_env.envs.parallel import make_config
+from formation_env.tasks import make_config
 from formation_env.scenarios import get_scenario
 from formation_env.sim.params import setpoint_ranges, setpoint_speed_range
-from formation_env.verification.wake_surfing import reference_optimum
-from train.wake_surfing_rollout import Surfer, fly
+from formation_env.tasks.wake_surfing.optimum import reference_optimum
+from train.wake_surfing_rollout import fly
 
 B = 2.9
 SC = get_scenario("wake_surfing")
@@ -29,18 +29,22 @@ def test_converges_on_the_optimum_in_calm_air():
     target is the constrained optimum on that line: within 120 s its vertical centre reaches the limit,
     and over the last 60 s of 180 its mean centre has a static saving (ELL map) within 3 % of the best
     on that line, laterally within 0.1 span of the optimum, never leaving the box."""
-    from formation_env.verification.close_formation_map import slot_savings
+    from formation_env.tasks.close_formation.optimum import slot_savings
 
     cfg = make_config(scenario="wake_surfing", learning="followers", randomisation=Randomisation(), duration_s=180.0)
     agent = _agent()
     centres = []
 
-    def act(obs, saving):
-        a = agent.act(obs, saving)
-        centres.append(agent.centre_m[0] / B + np.asarray(SC.slots[0].keyframes[0][1])[1:])
-        return a
+    class Watched:  # the seeker, its centre recorded at every decision
+        name = "es"
+        reset, observe = agent.reset, agent.observe
 
-    ep = fly(Surfer("es", act, agent.reset), [5], config=cfg, keep_series=True)[0]
+        def act(self, obs):
+            a = agent.act(obs)
+            centres.append(agent.centre_m[0] / B + np.asarray(SC.slots[0].keyframes[0][1])[1:])
+            return a
+
+    ep = fly(Watched(), [5], config=cfg, keep_series=True)[0]
     centres = np.asarray(centres)
     g = agent.gains
     z_limit = SC.safe_box_b[2][0] + (g.amplitude_z_m + g.margin_m) / B

@@ -21,7 +21,7 @@ trails downwind, to starboard of the track.) A follower at track-frame offset o 
     R(c) o = (x cos c - y sin c,  x sin c + y cos c,  z)
 
 in the leader's air-velocity ("heading") frame, so its saving is the calm-air saving there:
-:func:`saving_in_crosswind` evaluates :func:`formation_env.verification.close_formation_map.slot_savings`
+:func:`saving_in_crosswind` evaluates :func:`formation_env.tasks.close_formation.optimum.slot_savings`
 (the simulator's own ELL model, both aircraft at ``trim(25 m/s, 1000 m)``) at R(c) o. To first order
 the optimum's lateral offset moves to y = (y_calm + 2 sin c) / cos c for x = -2 b (the wake leaving the
 leader at angle c reaches 2 b downstream 2 sin c spans downwind); the x change in the heading frame
@@ -40,7 +40,7 @@ Assumptions: a steady, uniform wind (turbulence is ignored), both aircraft in st
 the trim attitude (the leader's turn and speed change enter only through its track and airspeed at
 each instant; the bank in a turn and the curved wake are ignored), the ELL model's saving at 25 m/s.
 
-``python -m formation_env.verification.wake_surfing`` rewrites the cache
+``python -m formation_env.tasks.wake_surfing.optimum`` rewrites the cache
 (``formation_env/data/wake_surfing_optimum.json``).
 """
 
@@ -55,9 +55,9 @@ from pathlib import Path
 
 import numpy as np
 
-from ..io import atomic_write_json
-from ..scenarios.definitions import AEROSONDE_SPAN_M, get_scenario
-from .close_formation_map import DEFAULT_Z_EXCLUSION_B, slot_savings
+from ...io import atomic_write_json
+from ...scenarios.definitions import AEROSONDE_SPAN_M, get_scenario
+from ..close_formation.optimum import DEFAULT_Z_EXCLUSION_B, slot_savings
 
 __all__ = ["SAFE_BOX_B", "X_B", "CRAB_MAX_DEG", "CACHE_PATH", "crab_angle_rad", "rotate_track_to_heading",
            "saving_in_crosswind", "optimum_in_box", "build_cache", "write_cache", "load_cache",
@@ -67,7 +67,7 @@ SAFE_BOX_B = get_scenario("wake_surfing").safe_box_b  # ((x_lo, x_hi), (y_lo, y_
 X_B = -2.0  # the follower's along-track set-point, spans
 CRAB_MAX_DEG = 15.0  # the cache's crab grid: -15..15 deg
 CRAB_STEP_DEG = 1.0
-CACHE_PATH = Path(__file__).resolve().parents[1] / "data" / "wake_surfing_optimum.json"
+CACHE_PATH = Path(__file__).resolve().parents[2] / "data" / "wake_surfing_optimum.json"
 MAP_Y_B = np.round(np.arange(0.0, 2.0 + 1e-9, 0.05), 6)  # the cached saving map's grid (crab 0)
 MAP_Z_B = np.round(np.arange(0.1, 0.8 + 1e-9, 0.025), 6)
 _SIDES = ("starboard", "port")
@@ -115,7 +115,7 @@ def rotate_track_to_heading(offsets_b, crab_rad) -> np.ndarray:
 def saving_in_crosswind(offsets_b, crab_rad, **model_kw) -> np.ndarray:
     """The follower's induced-drag saving (...) at track-frame offsets ``offsets_b`` (..., 3), spans,
     from the leader crabbing by ``crab_rad`` (rad; scalar or broadcast with the offsets' leading axes):
-    the calm-air :func:`~formation_env.verification.close_formation_map.slot_savings` of the rotated
+    the calm-air :func:`~formation_env.tasks.close_formation.optimum.slot_savings` of the rotated
     offsets (``model_kw`` go there: ``airspeed_mps``, ``altitude_m``, ``wake``)."""
     o = np.asarray(offsets_b, float)
     c = np.asarray(crab_rad, float)
@@ -196,7 +196,7 @@ def build_cache(*, airspeed_mps: float = 25.0, altitude_m: float = 1000.0, grid_
     yy, zz = np.meshgrid(MAP_Y_B, MAP_Z_B, indexing="ij")
     smap = saving_in_crosswind(np.stack([np.full_like(yy, X_B), yy, zz], axis=-1), 0.0, **kw)
     return {
-        "_about": "Wake-surfing reference (formation_env.verification.wake_surfing): the follower's best "
+        "_about": "Wake-surfing reference (formation_env.tasks.wake_surfing.optimum): the follower's best "
                   "induced-drag saving (ELL, 1 - D_i formation / D_i alone) in the wake_surfing safe box at "
                   "x = -2 spans behind the leader, as a function of the leader's crab angle c (deg, positive "
                   "when the wind blows toward starboard of the track; sin c = crosswind / airspeed). Offsets "
@@ -268,7 +268,7 @@ def episode_reference(wind_ned, track_rad, airspeed_mps, *, cache: dict | None =
 
 
 def main(argv=None) -> int:
-    """``python -m formation_env.verification.wake_surfing [--cache PATH]``: rewrite the cache."""
+    """``python -m formation_env.tasks.wake_surfing.optimum [--cache PATH]``: rewrite the cache."""
     p = argparse.ArgumentParser(description="Rewrite the cached wake-surfing optimum table.")
     p.add_argument("--cache", default=str(CACHE_PATH))
     a = p.parse_args(argv)

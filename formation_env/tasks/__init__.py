@@ -1,0 +1,17 @@
+"""Tasks as self-contained units (:class:`~formation_env.tasks.base.Task`): each holds its scenario, the
+preset that poses it for learning, its action ranges and safe box (in the scenario), its reference optimum
+and metrics where it has them, and the names of the baselines it is judged against.
+
+* :mod:`.thesis`: the thesis's scenarios and the N-UAV formations (EnvConfig defaults);
+* :mod:`.close_formation`: hold the ELL's induced-drag optimum (its saving map: ``.optimum``);
+* :mod:`.wake_surfing`: find and hold the least-drag position in a safe box (``.optimum``, ``.metrics``).
+
+Importing this package registers every task (and its scenario) in order; ``formation_env`` imports it.
+"""
+
+from .base import TASKS, Task, get_task, gym_ids, make_config, register_task, task_names, task_options
+from . import thesis  # noqa: F401  (registers)
+from . import close_formation  # noqa: F401
+from . import wake_surfing  # noqa: F401
+
+__all__ = ["Task", "TASKS", "get_task", "task_names", "register_task", "task_options", "make_config", "gym_ids"]

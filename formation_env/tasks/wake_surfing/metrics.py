@@ -1,0 +1,108 @@
+"""The wake-surfing task's per-episode metrics, recorded on the batched rollout (:func:`formation_env.rollout.rollout`)
+and measured against each episode's reference optimum (:mod:`.optimum`).
+
+Per episode (10 Hz decisions, the follower):
+
+=========================  =========================================================================
+saving                     mean induced-drag saving over the episode (1 - D_i formation / D_i alone),
+                           a decision outside the safe box counted as 0 (there the saving may be the
+                           ELL's wake-plane artefact); ``saving_measured``: every decision as measured
+reference_saving           mean over the episode of the reference optimum's saving at each instant's
+                           crab angle (:func:`.optimum.episode_reference`)
+saving_ratio               saving / reference_saving
+time_to_80_s               first time the saving (counted as above), averaged over the last second,
+                           reaches 80 % of the reference (NaN: never)
+box_outside_frac           fraction of the decisions outside the safe box
+box_outside_longest_s      longest continuous time outside the box
+min_separation_m           smallest CG distance to the leader at the decision instants
+collision / crashed        the episode ended by a collision / an envelope exit
+lateral_b, vertical_b      the follower's path relative to the leader (track frame, spans), and the
+                           reference optimum's, for the figure (with ``keep_series``)
+=========================  =========================================================================
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ...frames import ned_to_track_frame
+from ...rollout import Recorder, RolloutResult
+from ...scenarios import AEROSONDE_SPAN_M
+
+__all__ = ["WakeSurfingRecorder", "episode_metrics", "longest_run", "WINDOW_S"]
+
+WINDOW_S = 1.0  # the saving is averaged over this before the 80 % test
+
+
+def longest_run(flags: np.ndarray) -> int:
+    """Length of the longest run of True in a 1-D bool array."""
+    best = run = 0
+    for f in flags:
+        run = run + 1 if f else 0
+        best = max(best, run)
+    return best
+
+
+class WakeSurfingRecorder(Recorder):
+    """Records the follower (vehicle 1) of every formation at each decision (NaN once its episode ended)."""
+
+    def start(self, sim, out) -> None:
+        self.rec = {k: [] for k in ("saving", "box", "sep", "rel", "chi", "speed")}
+        self.wind = sim.state.steady_wind.copy()  # each episode's steady wind (the reference follows it)
+        self.hz = sim.config.control_hz
+
+    def after_step(self, sim, out, actions, alive, k) -> None:
+        rec, info = self.rec, out.info
+        saving = np.where(alive, info.induced_drag_saving[:, 1], 0.0)
+        vd0 = sim.velocity_demand[:, 0]
+        chi = np.arctan2(vd0[:, 1], vd0[:, 0])
+        rel = ned_to_track_frame(sim.aircraft[:, 1, 10:13] - sim.aircraft[:, 0, 10:13], chi) / AEROSONDE_SPAN_M
+        rec["saving"].append(np.where(alive, saving, np.nan))
+        rec["box"].append(np.where(alive, info.box_depth_m[:, 1], np.nan))
+        rec["sep"].append(np.where(alive, sim.output.separation_m[:, 1], np.nan))
+        rec["rel"].append(np.where(alive[:, None], rel, np.nan))
+        rec["chi"].append(chi)
+        rec["speed"].append(np.linalg.norm(vd0, axis=1))
+
+
+def episode_metrics(rec: WakeSurfingRecorder, result: RolloutResult, keep_series: bool = False) -> list[dict]:
+    """The module's table for every episode of a rollout recorded by ``rec``."""
+    from .optimum import episode_reference
+
+    hz, wind = rec.hz, rec.wind
+    arr = {key: np.stack(v) for key, v in rec.rec.items()}  # (T, B, ...)
+    window = max(1, int(round(WINDOW_S * hz)))
+    out = []
+    for i, seed in enumerate(result.seeds):
+        n = int(result.decisions[i])
+        sv = arr["saving"][:n, i]
+        outside = arr["box"][:n, i] > 0.0
+        # outside the box a decision earns nothing: there the ELL's saving may be the wake-plane band's
+        # artefact (up to ~0.8), which no controller may claim
+        sv_in = np.where(outside, 0.0, sv)
+        ref = episode_reference(wind[i], arr["chi"][:n, i], arr["speed"][:n, i])
+        ref_saving = float(ref["mean_saving"])
+        smooth = np.convolve(sv_in, np.ones(window) / window, mode="full")[:n]
+        smooth[:window - 1] = -np.inf  # a full second first
+        reached = np.nonzero(smooth >= 0.8 * np.asarray(ref["saving"]))[0]
+        m = {
+            "seed": seed,
+            "duration_s": n / hz,
+            "saving": float(np.mean(sv_in)),
+            "saving_measured": float(np.mean(sv)),
+            "reference_saving": ref_saving,
+            "saving_ratio": float(np.mean(sv_in) / ref_saving),
+            "time_to_80_s": float((reached[0] + 1) / hz) if len(reached) else float("nan"),
+            "box_outside_frac": float(np.mean(outside)),
+            "box_outside_longest_s": float(longest_run(outside) / hz),
+            "min_separation_m": float(np.nanmin(arr["sep"][:n, i])),
+            "collision": bool(result.collided[i]),
+            "crashed": bool(result.crashed[i]),
+            "crosswind_mps": float(wind[i, 1]),
+        }
+        if keep_series:
+            m["series"] = {"lateral_b": arr["rel"][:n, i, 1].tolist(), "vertical_b": arr["rel"][:n, i, 2].tolist(),
+                           "saving": sv.tolist(), "reference_lateral_b": np.asarray(ref["y_b"]).tolist(),
+                           "reference_vertical_b": np.asarray(ref["z_b"]).tolist()}
+        out.append(m)
+    return out
