@@ -56,14 +56,14 @@ import time
 from collections.abc import Callable, Sequence
 from pathlib import Path
 
-from .comparisons import BASELINES, compare_episodes, comparisons, group_report, seed_groups
 from .config import TEST_SEED_BASE
 from .eval_episodes import SPAN_M, SUCCESS_WINDOW_S, eval_env_config, run_episodes
 from .eval_policy import EvalPolicy
-from .eval_report import _plots, comparison_table, groups_table, markdown_table
-from .eval_summary import selection_score, summarise
-from .policy_loader import load_policy
-from .stats import N_BOOT
+from .evaluation.comparisons import BASELINES, compare_episodes, comparisons, group_report, seed_groups
+from .evaluation.policy_loader import load_policy
+from .evaluation.report import _plots, comparison_table, groups_table, markdown_table
+from .evaluation.stats import N_BOOT
+from .evaluation.summary import selection_score, summarise
 
 __all__ = ["EvalPolicy", "load_policy", "run_episodes", "summarise", "evaluate", "eval_env_config", "compare_episodes",
            "comparisons", "seed_groups", "group_report", "BASELINES", "TEST_EPISODES", "SUCCESS_WINDOW_S", "SPAN_M",
@@ -150,7 +150,7 @@ def evaluate(policies: Sequence[str], *, scenario: str, episodes: int = TEST_EPI
                               turbulence_field=turbulence_field,
                               control_hz=pol.control_hz, compute_benefit=compute_benefit, duration_s=duration_s)
         t0 = time.perf_counter()
-        eps = run_episodes(pol.act, cfg, seeds, keep_series=True, reset=pol.reset)
+        eps = run_episodes(pol, cfg, seeds, keep_series=True)
         summ = summarise(eps, n_boot=n_boot)
         summ["wall_s"] = round(time.perf_counter() - t0, 2)
         results[pol.name] = {"policy": pol.path or specs[pol.name], "action_mode": pol.action_mode, "summary": summ,

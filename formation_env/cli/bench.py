@@ -77,7 +77,7 @@ def _print_human(results: dict) -> None:
 
 
 def _run_rllib(args) -> int:
-    from train.rllib_backend import benchmark_sampling
+    from train.rllib.backend import benchmark_sampling
 
     runners = args.runners or [1, 2]
     envs = 1 if args.envs_per_runner is None else args.envs_per_runner

@@ -1,7 +1,7 @@
 """``formation-env train``: train an SB3 policy (PPO, SAC or TD3) on a formation scenario, or, with
 ``--backend rllib``, multi-agent PPO on Ray RLlib (locally or on an existing Ray cluster).
 
-See ``train/train.py`` and ``train/rllib_backend.py`` for the run directory layouts and
+See ``train/sb3/train.py`` and ``train/rllib/backend.py`` for the run directory layouts and
 ``docs/training.md`` for the committed runs."""
 
 from __future__ import annotations
@@ -35,7 +35,8 @@ def _nonneg_int(text: str) -> int:
 
 
 def register(sub) -> None:
-    from train.config import ACTION_MODES, ALGOS
+    from train.config import ACTION_MODES
+    from train.sb3.config import ALGOS
 
     from ..scenarios import scenario_names
 
@@ -113,7 +114,7 @@ def run(args) -> int:
     _check_config(args.config)
     command = "formation-env " + " ".join(shlex.quote(a) for a in sys.argv[1:]) if sys.argv[1:2] == ["train"] else None
     if args.backend == "rllib":
-        from train.rllib_backend import train_rllib
+        from train.rllib.backend import train_rllib
 
         if args.algo not in (None, "ppo"):
             raise ValueError(f"--backend rllib trains multi-agent PPO only, got --algo {args.algo}")
@@ -128,7 +129,7 @@ def run(args) -> int:
     given = [f"--{k.replace('_', '-')}" for k in _RLLIB_ONLY if getattr(args, k) is not None]
     if given:
         raise ValueError(f"{', '.join(given)}: only with --backend rllib")
-    from train.train import train
+    from train.sb3.train import train
 
     train(scenario=args.scenario, algo=args.algo, action_mode=args.action_mode or "residual",
           seed=0 if args.seed is None else args.seed, steps=args.steps, config_file=args.config, out_dir=args.out,

@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 import formation_env
-from formation_env.envs.core import INFO_REWARD_KEYS
+from formation_env.sim.simulation import INFO_REWARD_KEYS
 from formation_env.envs.observations import observation_size
 
 ID = "formation_env/FormationKeeping-v0"

@@ -52,7 +52,7 @@ def test_spaces_hold_every_emitted_value(obs_mode):
 # ---------------------------------------------------------------- option and input validation (issue 15)
 def test_unknown_options_raise_type_error_naming_them_bad_values_value_error():
     from formation_env.envs import FormationVecEnv, FormationVectorEnv
-    from formation_env.envs.parallel import make_config
+    from formation_env.tasks import make_config
 
     makers = {
         "make_config": lambda **kw: make_config(**kw),
@@ -133,7 +133,7 @@ def test_every_id_has_max_episode_steps_of_one_episode():
 
 
 def test_infos_are_flat_arrays_and_scalars_with_the_same_keys_at_reset_and_step():
-    from formation_env.envs.core import INFO_REWARD_KEYS
+    from formation_env.sim.simulation import INFO_REWARD_KEYS
 
     env = formation_env.parallel_env("formation_keeping", compute_benefit=True)
     _, infos0 = env.reset(seed=0)

@@ -25,7 +25,7 @@ def _rollout(scenario, seed, n_steps, mode):
         act = {a: rng.uniform(-1, 1, 4).astype(np.float32) for a in env.agents}
         obs, rew, term, trunc, info = env.step(act)
         trace.append((np.concatenate([obs[a] for a in sorted(obs)]), np.array([rew[a] for a in sorted(rew)]),
-                      env.engine.state.copy()))
+                      env.sim.aircraft.copy()))
     return trace
 
 
@@ -68,8 +68,8 @@ def test_pid_through_the_env_reproduces_the_runner(scenario):
         env.step({a: np.zeros(4, np.float32) for a in env.agents})
         k += env.substeps
         if k < run.time.size:
-            assert np.array_equal(env.engine.state[0, :, 10:13], run.h["position_ned"][k]), k
-            assert np.array_equal(env.engine.induced[0], run.h["induced_wind_ned"][k - 1]), k
+            assert np.array_equal(env.sim.aircraft[0, :, 10:13], run.h["position_ned"][k]), k
+            assert np.array_equal(env.sim.induced[0], run.h["induced_wind_ned"][k - 1]), k
     assert k >= run.time.size - 1
 
 
@@ -125,7 +125,7 @@ def test_collision_terminates_every_agent_with_the_penalty():
     env = formation_env.parallel_env("formation_keeping", action_mode="residual")
     env.reset(seed=0)
     # Put the follower 1 m behind the leader's CG (less than 0.5 span = 1.45 m).
-    env.engine.state[0, 1, 10:13] = env.engine.state[0, 0, 10:13] + np.array([-1.0, 0.0, 0.0])
+    env.sim.aircraft[0, 1, 10:13] = env.sim.aircraft[0, 0, 10:13] + np.array([-1.0, 0.0, 0.0])
     obs, rew, term, trunc, info = env.step({a: np.zeros(4, np.float32) for a in env.agents})
     assert all(term.values()) and not any(trunc.values()) and env.agents == []
     for a in ("uav_0", "uav_1"):
@@ -156,14 +156,14 @@ def test_compiled_observations_equal_the_numpy_definition():
     for _ in range(40):
         act = {a: rng.uniform(-1, 1, 4) for a in env.agents}
         obs, *_ = env.step(act)
-        e = env.engine
-        prev = e.sim_state.previous_action
+        e = env.sim
+        prev = e.state.previous_action
         np.testing.assert_allclose(prev[0, 1], act["uav_1"], rtol=0, atol=1e-6)
-        sched = slot_schedule_features(e.scenario, e.time_s, e.slot_jitter)
-        ref = build_observations_reference(e.state, e.induced, e.omega, e.ambient_wind(), np.zeros_like(e.induced),
-                                           e.position_demand, e.velocity_demand, prev, sched, e.controller_state(),
+        sched = slot_schedule_features(e.scenario, e.time_s, e.state.slot_jitter)
+        ref = build_observations_reference(e.aircraft, e.induced, e.omega, e.ambient_wind(), np.zeros_like(e.induced),
+                                           e.position_demand, e.velocity_demand, prev, sched, e.state.controller,
                                            e.scenario.airspeed_mps, e.scenario.altitude_m)
-        np.testing.assert_allclose(env.core.observations(), ref, rtol=0, atol=1e-12)
+        np.testing.assert_allclose(env.sim.output.observation, ref, rtol=0, atol=1e-12)
         np.testing.assert_allclose(obs["uav_1"], ref[0, 1].astype(np.float32), rtol=0, atol=0)
 
 
@@ -174,8 +174,8 @@ def test_leader_manoeuvre_turns_climbs_and_changes_speed_as_drawn():
                                      randomisation=Randomisation(leader_turn_deg=30.0, leader_climb_m=10.0,
                                                                  leader_speed_mps=2.0))
     env.reset(seed=7)
-    eng = env.engine
-    t0, dpsi, dh, dv = eng.manoeuvre[0]
+    eng = env.sim
+    t0, dpsi, dh, dv = eng.state.manoeuvre[0]
     assert 0.0 <= t0 <= 20.0 and abs(dpsi) > 0 and abs(dh) > 0 and abs(dv) > 0
     while env.agents:
         env.step({a: np.zeros(4, np.float32) for a in env.agents})
@@ -184,4 +184,4 @@ def test_leader_manoeuvre_turns_climbs_and_changes_speed_as_drawn():
     assert np.hypot(vd[0], vd[1]) == pytest.approx(25.0 + dv, abs=1e-12)
     assert vd[2] == 0.0
     # Altitude of the reference changed by the drawn amount (within one physics step of climb).
-    assert -eng.ref_pos[0, 2] - 1000.0 == pytest.approx(dh, abs=1.5 * eng.dt + 1e-9)
+    assert -eng.state.reference_position[0, 2] - 1000.0 == pytest.approx(dh, abs=1.5 * eng.dt + 1e-9)

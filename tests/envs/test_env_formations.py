@@ -15,7 +15,7 @@ def test_pid_holds_echelon_and_vee_with_every_follower_in_upwash(scenario, n):
     errors = []
     while env.agents:
         obs, rew, term, trunc, infos = env.step({a: np.zeros(4, np.float32) for a in env.agents})
-        if env.engine.time_s[0] > 6.0:
+        if env.sim.time_s[0] > 6.0:
             errors.append([infos[a]["slot_error_m"] for a in sorted(infos)])
     assert all(trunc.values())
     assert np.max(errors) < 0.5

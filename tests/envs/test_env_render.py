@@ -38,7 +38,7 @@ def _diverged_vec_env():
 
 def test_vec_env_get_images_one_frame_per_index_each_formation_its_own():
     venv = _diverged_vec_env()
-    eng, a = venv.batch.core.engine, venv.batch.agents_per_formation
+    eng, a = venv.batch.sim, venv.batch.agents_per_formation
     assert venv.render_mode == "rgb_array"
     images = venv.get_images()
     assert len(images) == venv.num_envs
@@ -49,7 +49,7 @@ def test_vec_env_get_images_one_frame_per_index_each_formation_its_own():
         for k in range(1, a):
             assert np.array_equal(images[f * a], images[f * a + k])
     # the follower's relative position differs between the formations, so must their frames
-    rel = eng.state[:, 1, 10:13] - eng.state[:, 0, 10:13]
+    rel = eng.aircraft[:, 1, 10:13] - eng.aircraft[:, 0, 10:13]
     assert np.linalg.norm(rel[0] - rel[1]) > 0.5
     assert not np.array_equal(images[0], images[a])
 
@@ -57,7 +57,7 @@ def test_vec_env_get_images_one_frame_per_index_each_formation_its_own():
     for f in range(venv.batch.n_formations):
         frame = r.draw(f)
         assert np.array_equal(frame, images[f * a])  # get_images() drew formation f for its indices
-        pos = eng.state[f, :, 10:13]  # NED
+        pos = eng.aircraft[f, :, 10:13]  # NED
         for i in range(pos.shape[0]):
             assert _colour_near(frame, r.ax_top, pos[i, 1], pos[i, 0], vehicle_colour(i)), (f, i)
             for j in range(pos.shape[0]):  # nobody else's colour at a vehicle's centre when apart
@@ -73,17 +73,17 @@ def test_vec_env_get_images_one_frame_per_index_each_formation_its_own():
 def test_vec_env_frames_follow_the_flight():
     venv = FormationVecEnv(1, scenario="formation_keeping", render_mode="rgb_array", seed=0)
     venv.reset()
-    eng = venv.batch.core.engine
+    eng = venv.batch.sim
     before = venv.get_images()[0]
-    north0 = eng.state[0, :, 10].copy()
+    north0 = eng.aircraft[0, :, 10].copy()
     for _ in range(5):
         venv.step(np.zeros((venv.num_envs, 4), dtype=np.float32))
     after = venv.get_images()[0]
-    assert np.all(eng.state[0, :, 10] > north0 + 5.0)  # flying north
+    assert np.all(eng.aircraft[0, :, 10] > north0 + 5.0)  # flying north
     r = venv._renderer
     # the view follows the formation: its north limits moved north by the distance flown
     lo, hi = r.ax_top.get_ylim()
-    centre = eng.state[0, :, 10].mean()
+    centre = eng.aircraft[0, :, 10].mean()
     assert lo < centre < hi and abs((lo + hi) / 2 - centre) < 1e-6
     assert not np.array_equal(before, after)
     venv.close()
@@ -131,7 +131,7 @@ def test_parallel_env_rgb_frame_shows_the_aircraft_where_they_are():
     env.reset(seed=0)
     frame = env.render()
     assert frame.ndim == 3 and frame.shape[2] == 3 and frame.dtype == np.uint8
-    r, pos = env._renderer, env.engine.state[0, :, 10:13]
+    r, pos = env._renderer, env.sim.aircraft[0, :, 10:13]
     for i in range(pos.shape[0]):
         assert _colour_near(frame, r.ax_top, pos[i, 1], pos[i, 0], vehicle_colour(i)), i
         assert _colour_near(frame, r.ax_side, pos[i, 0], -pos[i, 2], vehicle_colour(i)), i
@@ -171,7 +171,7 @@ def test_figures_and_frames_name_vehicles_uav_i_and_show_full_altitudes():
     env.reset(seed=0)
     env.render()
     r = env._renderer
-    assert {t.get_text() for t in r.ax_top.texts} == {f"uav_{i}" for i in range(env.engine.n_vehicles)}
+    assert {t.get_text() for t in r.ax_top.texts} == {f"uav_{i}" for i in range(env.sim.n_vehicles)}
     alt_ticks = [float(t.get_text().replace("\u2212", "-")) for t in r.ax_side.get_yticklabels() if t.get_text()]
     assert alt_ticks and all(900.0 < v < 1100.0 for v in alt_ticks)
     env.close()

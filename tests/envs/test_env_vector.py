@@ -48,13 +48,13 @@ def test_only_finished_formations_reset():
     venv.reset()
     for _ in range(5):
         venv.step(np.zeros((3, 4)))
-    eng = venv.batch.core.engine
-    eng.state[1, 1, 10:13] = eng.state[1, 0, 10:13] + np.array([-1.0, 0.0, 0.0])  # formation 1 collides
+    eng = venv.batch.sim
+    eng.aircraft[1, 1, 10:13] = eng.aircraft[1, 0, 10:13] + np.array([-1.0, 0.0, 0.0])  # formation 1 collides
     obs, rew, done, infos = venv.step(np.zeros((3, 4)))
     assert done.tolist() == [False, True, False]
     assert "terminal_observation" in infos[1] and not infos[1]["TimeLimit.truncated"]
     assert infos[1]["episode"]["l"] == 6 and infos[0] == {}
-    assert eng.step_count.tolist() == [30, 0, 30]  # 6 decisions x 5 physics steps; formation 1 restarted
+    assert eng.state.step.tolist() == [30, 0, 30]  # 6 decisions x 5 physics steps; formation 1 restarted
     assert np.array_equal(obs[1], venv.batch.observations()[1])
 
 
@@ -89,4 +89,4 @@ def test_gymnasium_vector_env_same_step_autoreset():
         obs, rew, term, trunc, infos = venv.step(venv.action_space.sample())
     assert trunc.all() and infos["_final_obs"].all()
     assert infos["final_obs"][0].shape == obs[0].shape
-    assert venv.batch.core.engine.step_count.tolist() == [0, 0]  # already reset
+    assert venv.batch.sim.state.step.tolist() == [0, 0]  # already reset

@@ -8,14 +8,15 @@ import formation_env
 from formation_env.envs import EnvConfig, Randomisation, RewardWeights
 from formation_env.envs.observations import group_sizes, slog, to_dict
 from formation_env.envs.rewards import huber
+from formation_env.rollout import ZeroPolicy
 from tests.oracles.env_step import reward_terms
 
 B = 2.9
 
 
 def _obs_groups(env, agent="uav_1"):
-    allobs = env.core.observations()[0]
-    return to_dict(allobs[env.agent_indices.index(int(agent[4:]))], env.engine.n_vehicles)
+    allobs = env.sim.output.observation[0]
+    return to_dict(allobs[env.agent_indices.index(int(agent[4:]))], env.sim.n_vehicles)
 
 
 # ------------------------------------------------------------------ turbulence in the env
@@ -29,7 +30,7 @@ def _gust_series(field, seed=3, steps=300):
     for _ in range(steps):
         _, _, _, _, infos = env.step(zero)
         out.append([infos["uav_1"]["gust_ned_mps"]])
-        lead.append(env.engine.turbulence_gust_ned()[0, 0].copy())
+        lead.append(env.sim.state.gust_ned[0, 0].copy())
     return np.array(out)[1:, 0], np.array(lead)
 
 
@@ -97,10 +98,10 @@ def test_residual_actions_are_washed_out_by_the_pid_integrators():
 def test_slot_errors_are_signed_log_scaled_and_do_not_saturate():
     env = formation_env.parallel_env("formation_keeping", action_mode="setpoints")
     env.reset(seed=0)
-    eng = env.engine
+    eng = env.sim
     seen = []
     for along in (-300.0, -30.0, -1.0, 0.1, 30.0, 300.0):
-        eng.state[0, 1, 10:13] = eng.position_demand_now()[0, 1] + np.array([along, 0.0, 0.0])
+        eng.aircraft[0, 1, 10:13] = eng.position_demand[0, 1] + np.array([along, 0.0, 0.0])
         eng.observe()
         g = _obs_groups(env)
         assert g["slot_position_error"][0] == pytest.approx(slog(along, 1.0), rel=1e-9, abs=1e-9)
@@ -121,7 +122,7 @@ def test_reconfiguration_agents_see_the_slot_schedule():
     g = _obs_groups(env)["slot_schedule"]
     assert 0.2 < g[2] < 1.0 and g[5] > 0.0  # offset moving down, rate positive (down)
     assert np.allclose(g[6:9], [0.0, 0.0, 1.0 - g[2]]) and g[9] == pytest.approx(0.3)
-    leader = to_dict(env.core.observations()[0, 0], 2)["slot_schedule"]
+    leader = to_dict(env.sim.output.observation[0, 0], 2)["slot_schedule"]
     assert np.allclose(leader[:9], 0.0) and leader[9] == 1.0
 
 
@@ -177,12 +178,12 @@ def test_pid_formation_holds_the_slot_in_calm_air_and_beats_the_thesis_pid_in_gu
 
     calm = eval_env_config("formation_keeping", "setpoints", turbulence_sigma_mps=0.0, duration_s=30.0)
     agent = PIDFormation()
-    s = summarise(run_episodes(agent.act, calm, [1], reset=agent.reset))
+    s = summarise(run_episodes(agent, calm, [1]))
     assert s["max_slot_error_m"] < 0.1
     seeds = list(range(100, 106))  # training-range seeds, not the held-out ones
     gusty = eval_env_config("formation_keeping", "setpoints", duration_s=40.0)
-    pf = summarise(run_episodes(agent.act, gusty, seeds, reset=agent.reset))["rms_slot_error_m"]
-    pid = summarise(run_episodes(lambda o: np.zeros((o.shape[0], 4)),
+    pf = summarise(run_episodes(agent, gusty, seeds))["rms_slot_error_m"]
+    pid = summarise(run_episodes(ZeroPolicy(),
                                  eval_env_config("formation_keeping", "residual", duration_s=40.0), seeds))
     assert pf < 0.7 * pid["rms_slot_error_m"]
 
@@ -206,10 +207,10 @@ def test_a_diverged_uav_does_not_break_the_frozen_field():
     env = formation_env.parallel_env("formation_keeping", action_mode="setpoints", learning="followers",
                                      randomisation=Randomisation(turbulence_sigma_mps=1.0))
     env.reset(seed=0)
-    eng = env.engine
-    eng.state[0, 1, 10:13] = np.nan  # as if the follower had diverged in the last physics step
+    eng = env.sim
+    eng.aircraft[0, 1, 10:13] = np.nan  # as if the follower had diverged in the last physics step
     eng.observe()
-    assert np.all(np.isfinite(eng.gust_ned)) and np.all(np.isfinite(eng.turbulence_gust_ned()))
-    assert np.all(np.isfinite(env.core.observations()))
+    assert np.all(np.isfinite(eng.state.gust_ned)) and np.all(np.isfinite(eng.info.gust_ned_mps))
+    assert np.all(np.isfinite(env.sim.output.observation))
     obs, rew, term, trunc, _ = env.step({a: np.zeros(4, np.float32) for a in env.agents})
     assert term["uav_1"] and np.isfinite(rew["uav_1"]) and np.all(np.isfinite(obs["uav_1"]))

@@ -11,9 +11,10 @@ import pytest
 
 import formation_env  # noqa: F401  (registers the ids)
 from formation_env.envs.config import Randomisation
-from formation_env.envs.core import FormationCore
-from formation_env.envs.parallel import make_config
-from formation_env.envs.tasks import WAKE_SURFING_RANDOMISATION, WAKE_SURFING_REWARD, task_options
+from formation_env.sim import Simulation
+from formation_env.tasks import make_config
+from formation_env.tasks import task_options
+from formation_env.tasks.wake_surfing import WAKE_SURFING_RANDOMISATION, WAKE_SURFING_REWARD
 from formation_env.scenarios import Scenario, SlotSchedule, get_scenario
 from formation_env.sim.observe import box_depth_each, slot_error
 from formation_env.sim.params import safe_box_arrays, setpoint_ranges, slot_error_axes
@@ -23,18 +24,17 @@ B = 2.9
 SC = get_scenario("wake_surfing")
 
 
-def _calm_core(batch=1):
+def _calm_sim(batch=1):
     cfg = make_config(scenario="wake_surfing", learning="followers", randomisation=Randomisation())
-    core = FormationCore(cfg, batch_size=batch)
-    core.reset(None, list(range(batch)))
-    return core
+    sim = Simulation(cfg, batch_size=batch)
+    sim.reset(None, list(range(batch)))
+    return sim
 
 
-def _place_follower(core, offset_b):
+def _place_follower(sim, offset_b):
     """Put the follower at ``offset_b`` (spans, track frame = NED: the leader flies north at the start)."""
-    eng = core.engine
-    eng.sim_state.aircraft[:, 1, 10:13] = eng.sim_state.aircraft[:, 0, 10:13] + np.asarray(offset_b) * B
-    eng.observe()
+    sim.state.aircraft[:, 1, 10:13] = sim.state.aircraft[:, 0, 10:13] + np.asarray(offset_b) * B
+    sim.observe()
 
 
 # ------------------------------------------------------------------ geometry of the box
@@ -104,17 +104,16 @@ def test_a_box_must_contain_the_slots_and_be_well_formed():
 def test_reward_pays_the_saving_and_charges_the_downwash():
     """Sign: at the thesis slot the follower saves (benefit term > 0); directly behind the leader, in
     its downwash, the saving is negative and so is the term; the term is benefit x saving exactly."""
-    core = _calm_core(batch=2)
-    _place_follower(core, np.array([[-2.0, 1.0, 0.3], [-2.0, 0.0, 0.3]]))
-    core.step(np.zeros((2, 1, 4)))
-    eng = core.engine
-    saving = eng.out.saving[:, 1]
-    terms = eng.out.reward_terms[:, 1]
+    sim = _calm_sim(batch=2)
+    _place_follower(sim, np.array([[-2.0, 1.0, 0.3], [-2.0, 0.0, 0.3]]))
+    sim.step(np.zeros((2, 1, 4)))
+    saving = sim.output.saving[:, 1]
+    terms = sim.output.reward_terms[:, 1]
     assert saving[0] > 0.1 and saving[1] < -0.1
     np.testing.assert_allclose(terms[:, 5], WAKE_SURFING_REWARD.benefit * saving, rtol=1e-12)
     assert terms[0, 5] > 0 > terms[1, 5]
     # (y = 0 is inside the box: no box cost for either)
-    np.testing.assert_array_equal(eng.out.box_depth_m[:, 1], [0.0, 0.0])
+    np.testing.assert_array_equal(sim.output.box_depth_m[:, 1], [0.0, 0.0])
 
 
 def test_moving_to_the_optimum_raises_the_reward_in_calm_air():
@@ -122,42 +121,42 @@ def test_moving_to_the_optimum_raises_the_reward_in_calm_air():
     slot: after 20 s the saving and the per-decision reward are higher there (the task's gradient
     points at the optimum)."""
     low, high = setpoint_ranges(SC)
-    core = _calm_core(batch=2)
+    sim = _calm_sim(batch=2)
     a = np.zeros((2, 1, 4))
     a[1, 0, 1] = (0.963 - 1.0) * B / -low[1]
     a[1, 0, 2] = (0.15 - 0.3) * B / -low[2]
     for _ in range(200):
-        rewards, _, _ = core.step(a)
-    saving = core.engine.out.saving[:, 1]
+        rewards = sim.step(a).reward
+    saving = sim.output.saving[:, 1]
     assert saving[0] == pytest.approx(0.147, abs=0.02)  # the thesis slot's ELL saving (close_formation_map)
     assert saving[1] > saving[0] + 0.1
     assert rewards[1, 1] > rewards[0, 1] + 1.0
 
 
 def test_box_cost_matches_the_oracle_and_is_charged_outside_only():
-    core = _calm_core(batch=3)
-    _place_follower(core, np.array([[-2.0, 1.0, 0.3], [-2.0, 1.0, 0.02], [-2.0, 2.6, 0.3]]))
-    core.step(np.zeros((3, 1, 4)))
-    eng = core.engine
-    depth = eng.out.box_depth_m[:, 1]
+    sim = _calm_sim(batch=3)
+    _place_follower(sim, np.array([[-2.0, 1.0, 0.3], [-2.0, 1.0, 0.02], [-2.0, 2.6, 0.3]]))
+    sim.step(np.zeros((3, 1, 4)))
+    out = sim.output
+    depth = out.box_depth_m[:, 1]
     assert depth[0] == 0.0 and depth[1] > 0.0 and depth[2] > 0.0
     w = WAKE_SURFING_REWARD
     z = np.zeros((3, 1))
-    ref = reward_terms(w, eng.out.slot_error_m[:, 1:], z, z[..., None].repeat(4, -1), z[..., None].repeat(4, -1),
-                       eng.out.saving[:, 1:], eng.out.separation_m[:, 1:], np.zeros((3, 1), bool), np.zeros((3, 1), bool),
+    ref = reward_terms(w, out.slot_error_m[:, 1:], z, z[..., None].repeat(4, -1), z[..., None].repeat(4, -1),
+                       out.saving[:, 1:], out.separation_m[:, 1:], np.zeros((3, 1), bool), np.zeros((3, 1), bool),
                        0.5 * B, B, box_depth_m=depth[:, None])
-    np.testing.assert_allclose(eng.out.reward_terms[:, 1, 8], ref["box"][:, 0], rtol=1e-12)
-    assert eng.out.reward_terms[0, 1, 8] == 0.0
-    assert np.all(eng.out.reward_terms[1:, 1, 8] <= -w.box)
-    info = core.infos(1)[1]
-    assert info["box_depth_m"] == pytest.approx(depth[1]) and info["reward_box"] == pytest.approx(eng.out.reward_terms[1, 1, 8])
+    np.testing.assert_allclose(out.reward_terms[:, 1, 8], ref["box"][:, 0], rtol=1e-12)
+    assert out.reward_terms[0, 1, 8] == 0.0
+    assert np.all(out.reward_terms[1:, 1, 8] <= -w.box)
+    info = sim.infos(1)[1]
+    assert info["box_depth_m"] == pytest.approx(depth[1]) and info["reward_box"] == pytest.approx(out.reward_terms[1, 1, 8])
 
 
 def test_box_cost_outweighs_the_artefact_saving_in_the_excluded_band():
     """Inside |z| < 0.1 b of the leader's wake plane the ELL's discrete trailing legs give savings up to
     ~0.8 (an artefact; docs/close_formation.md). A policy must never gain by flying there: the box step
     alone must exceed the benefit weight times the largest saving gain over the band's edge."""
-    from formation_env.verification.close_formation_map import load_cache, slot_savings
+    from formation_env.tasks.close_formation.optimum import load_cache, slot_savings
 
     ripple = load_cache()["ripple"]  # the lateral profiles' peaks, 0.005 b apart, every 0.01 b of z
     z = np.asarray(ripple["z_b"])
@@ -192,9 +191,9 @@ def test_gym_id_and_parallel_env_pose_the_task():
 def test_crosswind_draw_is_across_the_initial_track_and_seeded():
     cfg = dataclasses.replace(make_config(scenario="wake_surfing", learning="followers"),
                               randomisation=Randomisation(crosswind_mps=5.0))
-    core = FormationCore(cfg, batch_size=4)
-    core.reset(None, [1, 2, 3, 1])
-    wind = core.engine.sim_state.steady_wind
+    sim = Simulation(cfg, batch_size=4)
+    sim.reset(None, [1, 2, 3, 1])
+    wind = sim.state.steady_wind
     assert np.all(wind[:, 0] == 0.0) and np.all(wind[:, 2] == 0.0)
     assert np.all(np.abs(wind[:, 1]) <= 5.0) and len(set(np.round(wind[:3, 1], 9))) == 3
     assert wind[3, 1] == wind[0, 1]

@@ -79,7 +79,7 @@ def test_recorder_on_the_env_matches_the_runner(log):
 
     env = formation_env.parallel_env("reconfiguration")
     env.reset(seed=0)
-    rec = EpisodeRecorder(env.engine)
+    rec = EpisodeRecorder(env.sim)
     rec.record()
     n = 20
     for _ in range(n):  # PID everywhere: the env's zero-override step (baseline flies)
@@ -90,7 +90,7 @@ def test_recorder_on_the_env_matches_the_runner(log):
     elog = rec.log()
     assert elog.n_vehicles == 2 and elog.n_samples == n + 1
     steps = np.diff(elog.time_s)  # one sample per env step (a whole decision interval of physics steps)
-    assert steps[0] >= env.engine.dt - 1e-12
+    assert steps[0] >= env.sim.dt - 1e-12
     np.testing.assert_allclose(steps, steps[0])
     assert np.all(np.isfinite(elog.position_ned)) and np.abs(elog.induced_wind_ned[:, 1]).max() > 1e-3
     # same start as the runner's log

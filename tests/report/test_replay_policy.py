@@ -49,7 +49,7 @@ def test_replay_sb3_zip_is_seeded_and_reproducible(tmp_path, capsys):
 
 
 def test_replay_pid_formation(tmp_path, capsys):
-    pytest.importorskip("train.policy_loader")
+    pytest.importorskip("train.evaluation.policy_loader")
     r = _replay(["--policy", "pid_formation", "--scenario", "formation_keeping", "--duration", "1",
                  "--seed", "3", "--turbulence", "0", "--out", str(tmp_path / "p")], capsys)
     assert r["policy"] == "pid_formation" and r["turbulence_sigma_mps"] == 0.0 and r["samples"] >= 2

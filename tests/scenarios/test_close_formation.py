@@ -7,7 +7,7 @@ import pytest
 import formation_env  # noqa: F401  (registers the Gym ids)
 from formation_env.envs import GYM_IDS, Randomisation
 from formation_env.scenarios import get_scenario, scenario_names
-from formation_env.verification import close_formation_map as cfm
+from formation_env.tasks.close_formation import optimum as cfm
 
 
 @pytest.fixture(scope="module")
@@ -119,11 +119,11 @@ def test_env_benefit_is_the_ell_saving_of_the_last_physics_step():
     env = formation_env.parallel_env("close_formation", action_mode="setpoints", control_hz=50.0, compute_benefit=True,
                                      randomisation=Randomisation(turbulence_sigma_mps=1.0))
     env.reset(seed=3)
-    eng = env.engine
+    eng = env.sim
     rng = np.random.default_rng(0)
     seen = []
     for _ in range(30):
-        before = eng.state.copy(), eng.ambient_wind().copy()
+        before = eng.aircraft.copy(), eng.ambient_wind().copy()
         _, _, term, _, infos = env.step({a: rng.uniform(-0.01, 0.01, 4).astype(np.float32) for a in env.agents})
         ref = formation_benefit(eng.wake_model, ell_state_from_aircraft(before[0], before[1], eng.wing_origin_body))
         got = [infos[a]["induced_drag_saving"] for a in env.possible_agents]

@@ -1,4 +1,4 @@
-"""The wake_surfing reference optimum (formation_env.verification.wake_surfing): crab-angle geometry,
+"""The wake_surfing reference optimum (formation_env.tasks.wake_surfing.optimum): crab-angle geometry,
 mirror symmetry, agreement with the close-formation optimum, the crosswind rotation checked against the
 compiled env's ELL benefit, and the cached table."""
 
@@ -9,8 +9,8 @@ import numpy as np
 import pytest
 
 from formation_env.scenarios import get_scenario
-from formation_env.verification import close_formation_map as cfm
-from formation_env.verification import wake_surfing as ws
+from formation_env.tasks.close_formation import optimum as cfm
+from formation_env.tasks.wake_surfing import optimum as ws
 
 B = 2.9  # span, m
 
@@ -81,11 +81,11 @@ def env_saving():
     ground track is north) and the follower at track-frame offsets (spans)."""
     from formation_env import frames
     from formation_env.aircraft import trim
-    from formation_env.envs.engine import FormationEpisode
-    from formation_env.envs.parallel import make_config
+    from formation_env.sim import Simulation
+    from formation_env.tasks import make_config
     from formation_env.sim.step import formation_benefit
 
-    eng = FormationEpisode(make_config(scenario="wake_surfing", learning="followers"), batch_size=1)
+    eng = Simulation(make_config(scenario="wake_surfing", learning="followers"), batch_size=1)
     eng.reset([0], [0])
     tr = trim(25.0, 1000.0)
 
@@ -106,10 +106,10 @@ def env_saving():
         for o in np.atleast_2d(offsets_b):
             st = np.repeat(x[None], 2, axis=0)
             st[1, 10:13] += np.asarray(o, float) * B
-            eng.sim_state.aircraft[0] = st
-            eng.sim_state.steady_wind[0] = wind
+            eng.state.aircraft[0] = st
+            eng.state.steady_wind[0] = wind
             sav = np.zeros(2)
-            formation_benefit(eng.params, eng.sim_state, 0, np.repeat(wind[None], 2, axis=0), sav)
+            formation_benefit(eng.params, eng.state, 0, np.repeat(wind[None], 2, axis=0), sav)
             out.append(sav[1])
         return c, e[2], np.array(out)
 

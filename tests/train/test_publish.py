@@ -4,7 +4,7 @@ import json
 
 import pytest
 
-from train import publish
+from train.publish import publish
 
 
 def test_attach_evaluation_writes_a_slim_record_and_updates_the_metadata(tmp_path, monkeypatch):

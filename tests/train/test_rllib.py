@@ -122,7 +122,7 @@ def test_rllib_trains_checkpoints_restores_and_evaluates_on_loopback_ray(tmp_pat
     assert len((run / "progress.csv").read_text().splitlines()) == 4
 
     # The restored weights are the saved ones, and training moved them on.
-    from train.rllib_backend import load_rllib_policy
+    from train.rllib.backend import load_rllib_policy
 
     obs = np.random.default_rng(0).normal(size=(8, _obs_size(2))).astype(np.float32)
     a2 = load_rllib_policy(ck2).act(obs)
@@ -151,7 +151,7 @@ def test_rllib_trains_checkpoints_restores_and_evaluates_on_loopback_ray(tmp_pat
 def test_rllib_per_role_policies_train_leader_and_follower(tmp_path, ray_tmpdir, monkeypatch):
     import ray
 
-    from train.rllib_backend import load_rllib_policy, train_rllib
+    from train.rllib.backend import load_rllib_policy, train_rllib
 
     monkeypatch.setenv("RAY_TMPDIR", ray_tmpdir)
     monkeypatch.delenv("RAY_ADDRESS", raising=False)
@@ -175,7 +175,7 @@ def test_rllib_same_seed_reproduces_the_run_with_two_env_runners(tmp_path, ray_t
     import ray
     import yaml as _yaml
 
-    from train.rllib_backend import RLlibTrainConfig, build_algo_config, connect, load_rllib_policy, train_rllib
+    from train.rllib.backend import RLlibTrainConfig, build_algo_config, connect, load_rllib_policy, train_rllib
 
     monkeypatch.setenv("RAY_TMPDIR", ray_tmpdir)
     monkeypatch.delenv("RAY_ADDRESS", raising=False)
@@ -224,7 +224,7 @@ def test_rllib_same_seed_reproduces_the_run_with_two_env_runners(tmp_path, ray_t
             train_rllib(out_dir=runs["c"], resume=True, seed=9, steps=800, **quiet)
 
         # The sampling benchmark (formation-env bench --rllib) on the same instance, tiny.
-        from train.rllib_backend import benchmark_sampling
+        from train.rllib.backend import benchmark_sampling
 
         bench = benchmark_sampling((0, 2), rounds=1, batch=100, **quiet)
         assert set(bench["results"]) == {0, 2}
@@ -251,7 +251,7 @@ def _obs_size(n_vehicles: int) -> int:
 
 def test_rllib_env_wrapper_keeps_agent_order_and_scales_rewards():
     import formation_env
-    from train.rllib_env import FormationMultiAgentEnv, role_policy, shared_policy
+    from train.rllib.env import FormationMultiAgentEnv, role_policy, shared_policy
 
     cfg = {"scenario": "echelon", "action_mode": "surfaces", "learning": "all", "env_kwargs": {}, "reward_scale": 0.5}
     env = FormationMultiAgentEnv(cfg)
@@ -274,7 +274,7 @@ def test_rllib_env_runners_and_resumes_draw_distinct_episodes():
     # get the same number, and a resumed run reseeds its runners. Their episodes must still differ.
     from ray.rllib.env.env_context import EnvContext
 
-    from train.rllib_env import FormationMultiAgentEnv
+    from train.rllib.env import FormationMultiAgentEnv
 
     cfg = {"scenario": "formation_keeping", "action_mode": "residual", "learning": "followers",
            "env_kwargs": {"randomisation": {"initial_offset_m": 2.0}}}
@@ -290,7 +290,7 @@ def test_rllib_env_runners_and_resumes_draw_distinct_episodes():
 
 
 def test_address_parsing_and_unreachable_cluster_errors(capsys, tmp_path, monkeypatch):
-    from train.rllib_backend import ClusterUnreachableError, check_reachable, connect, parse_address
+    from train.rllib.backend import ClusterUnreachableError, check_reachable, connect, parse_address
 
     assert parse_address(None) is None and parse_address("local") is None and parse_address("auto") == "auto"
     assert parse_address("10.0.0.5:6379") == ("10.0.0.5", 6379)
@@ -320,7 +320,7 @@ def test_address_parsing_and_unreachable_cluster_errors(capsys, tmp_path, monkey
 
 
 def test_missing_ray_gives_the_install_command(capsys, monkeypatch, tmp_path):
-    from train.rllib_backend import require_rllib
+    from train.rllib.backend import require_rllib
 
     monkeypatch.setitem(sys.modules, "ray", None)  # import ray -> ImportError, as when it is not installed
     with pytest.raises(MissingDependencyError, match=r'pip install -e "\.\[distributed\]"'):
@@ -336,7 +336,7 @@ def test_missing_ray_gives_the_install_command(capsys, monkeypatch, tmp_path):
 
 def test_nothing_outside_the_backend_imports_ray():
     code = ("import sys, formation_env, formation_env.envs, formation_env.cli, formation_env.runs.runner, "
-            "agents.run, train.train, train.evaluate, train.rllib_backend\n"
+            "agents.run, train.sb3.train, train.evaluate, train.rllib.backend\n"
             "formation_env.cli.build_parser()\n"
             "env = formation_env.parallel_env('formation_keeping'); env.reset(seed=0)\n"
             "print('ray' in sys.modules)")
@@ -369,7 +369,7 @@ def test_cli_backend_options_do_not_mix(capsys, tmp_path):
 
 
 def test_rllib_config_rejects_bad_values():
-    from train.rllib_backend import RLlibTrainConfig
+    from train.rllib.backend import RLlibTrainConfig
 
     with pytest.raises(ValueError, match="policies must be one of"):
         RLlibTrainConfig(scenario="formation_keeping", policies="each")

@@ -1,12 +1,12 @@
-"""train/stats.py on synthetic cases with known answers."""
+"""train/evaluation/stats.py on synthetic cases with known answers."""
 
 import math
 
 import numpy as np
 import pytest
 
-from train.stats import (bootstrap_ci, paired_comparison, paired_rate_difference, seed_spread, sign_test_p,
-                         wilson_interval)
+from train.evaluation.stats import (bootstrap_ci, paired_comparison, paired_rate_difference, seed_spread,
+                                    sign_test_p, wilson_interval)
 
 
 def test_constant_reduction_gives_degenerate_intervals():

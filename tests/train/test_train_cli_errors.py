@@ -3,9 +3,9 @@
 import pytest
 
 from formation_env.cli import main
-from train.config import TrainConfig, load_hyperparams
+from train.sb3.config import TrainConfig, load_hyperparams
 from train.evaluate import evaluate, load_policy
-from train.train import train
+from train.sb3.train import train
 
 
 def _err(capsys, argv):

@@ -14,6 +14,7 @@ import pytest
 import train.evaluate as ev
 from formation_env.cli import main
 from train.config import TEST_SEED_BASE, VALIDATION_SEED_BASE
+from formation_env.rollout import ZeroPolicy
 from train.evaluate import EvalPolicy, eval_env_config, evaluate, load_policy, run_episodes
 
 POLICIES = Path(__file__).resolve().parents[2] / "train" / "policies"
@@ -49,7 +50,7 @@ def test_evaluate_metrics_and_outputs(tmp_path, capsys):
 
 def test_evaluate_success_definition():
     cfg = eval_env_config("reconfiguration", "residual", turbulence_sigma_mps=0.0)
-    eps = run_episodes(lambda o: np.zeros((o.shape[0], 4)), cfg, [0])
+    eps = run_episodes(ZeroPolicy(), cfg, [0])
     # no turbulence: the thesis run, the PID ends on its final slot
     assert eps[0]["reconfig_success"] and not eps[0]["collision"]
     assert 35.0 < eps[0]["reconfig_time_s"] < 50.0
@@ -198,8 +199,8 @@ def test_cli_episodes_and_seeds(tmp_path, capsys, monkeypatch):
 
 
 def test_validation_episodes_are_drawn_like_the_test_set():
-    from train.config import TrainConfig
-    from train.train import _callbacks
+    from train.sb3.callbacks import build_callbacks as _callbacks
+    from train.sb3.config import TrainConfig
 
     env_kwargs = {"wake": False, "control_hz": 10.0, "randomisation": {"turbulence_sigma_mps": 0.3, "initial_offset_m": 1.0}}
     cfg = TrainConfig(scenario="reconfiguration", algo="ppo", action_mode="residual", seed=0, n_timesteps=100,

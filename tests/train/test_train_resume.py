@@ -5,7 +5,8 @@ import csv
 import numpy as np
 import pytest
 
-from train.train import latest_checkpoint, train
+from train.sb3.run_files import latest_checkpoint
+from train.sb3.train import train
 
 pytestmark = pytest.mark.filterwarnings("ignore::UserWarning")
 

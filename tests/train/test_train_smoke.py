@@ -4,7 +4,7 @@ import json
 
 import pytest
 
-from train.train import train
+from train.sb3.train import train
 
 pytestmark = pytest.mark.filterwarnings("ignore::UserWarning")
 

@@ -9,8 +9,8 @@ import numpy as np
 import pytest
 
 from formation_env.envs.config import Randomisation, RewardWeights
-from formation_env.envs.tasks import WAKE_SURFING_RANDOMISATION, WAKE_SURFING_REWARD
-from train.config import load_hyperparams
+from formation_env.tasks.wake_surfing import WAKE_SURFING_RANDOMISATION, WAKE_SURFING_REWARD
+from train.sb3.config import load_hyperparams
 from train.eval_episodes import longest_run, eval_env_config
 from train.wake_surfing_eval import paired_gain, summarise_surfer
 from train.wake_surfing_rollout import es_surfer, fly, oracle_surfer, pid_formation_surfer, pid_surfer, sb3_surfer

@@ -29,8 +29,8 @@ def _check_paired(a: list[dict], b: list[dict]) -> None:
 def compare_episodes(baseline: list[dict], candidate: list[dict] | None = None, *,
                      candidate_values: dict[str, np.ndarray] | None = None, n_boot: int = N_BOOT, seed: int = 0) -> dict:
     """Paired comparison of a candidate with a baseline on the same episodes: ``rms_slot_error_m``
-    (:func:`train.stats.paired_comparison`, reduction = baseline - candidate in m) and, when the
-    episodes have it, ``reconfig_success`` (:func:`train.stats.paired_rate_difference`, candidate -
+    (:func:`train.evaluation.stats.paired_comparison`, reduction = baseline - candidate in m) and, when the
+    episodes have it, ``reconfig_success`` (:func:`train.evaluation.stats.paired_rate_difference`, candidate -
     baseline). The candidate is its episode list or, for a seed group, ``candidate_values``: the
     per-episode values (seed-averaged) keyed by metric."""
     if candidate is not None:
@@ -90,7 +90,7 @@ def _scalar_metrics(summary: dict) -> list[str]:
 def group_report(members: dict[str, dict], baselines: dict[str, list[dict]], *, n_boot: int = N_BOOT) -> dict:
     """One policy trained with several seeds: ``members`` maps each seed's policy name to its
     ``{"summary", "episodes"}``. Returns ``policies``, ``n_seeds``, ``summary`` (for every scalar
-    summary metric, :func:`train.stats.seed_spread` of the seeds' values: mean, std, min, max, n),
+    summary metric, :func:`train.evaluation.stats.seed_spread` of the seeds' values: mean, std, min, max, n),
     ``per_episode`` (the seed-averaged per-episode RMS error, and success when present) and
     ``comparisons`` ({baseline: compare_episodes} of the seed-averaged per-episode metrics)."""
     names = list(members)

@@ -8,8 +8,9 @@ from pathlib import Path
 
 import numpy as np
 
-from .config import ACTION_MODES, ALGOS
-from .eval_policy import EvalPolicy
+from ..config import ACTION_MODES
+from ..eval_policy import EvalPolicy
+from ..sb3.config import ALGOS
 
 __all__ = ["load_policy"]
 
@@ -61,8 +62,8 @@ def load_policy(spec: str, *, action_mode: str | None = None, name: str | None =
     path = Path(spec)
     if path.is_dir():
         # An RLlib checkpoint (or run directory); ray is imported only here, and only then.
-        from .rllib_checkpoints import is_rllib_checkpoint
-        from .rllib_policy import load_rllib_policy
+        from ..rllib.checkpoints import is_rllib_checkpoint
+        from ..rllib.policy import load_rllib_policy
 
         if not is_rllib_checkpoint(path):
             raise ValueError(f"policy directory {spec!r} is not an RLlib checkpoint or run directory of this project")

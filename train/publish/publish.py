@@ -18,7 +18,7 @@ import yaml
 
 from formation_env.io import atomic_write, atomic_write_json
 
-POLICIES = Path(__file__).resolve().parent / "policies"
+POLICIES = Path(__file__).resolve().parents[1] / "policies"
 
 
 def publish(run_dir: str | Path, name: str, *, eval_json: str | Path | None = None, wall_s: float | None = None,
@@ -79,7 +79,7 @@ def attach_evaluation(names: list[str], eval_json: str | Path, record: str | Pat
 
 
 def main() -> None:
-    ap = argparse.ArgumentParser()
+    ap = argparse.ArgumentParser(prog="python -m train.publish")
     ap.add_argument("run_dir")
     ap.add_argument("name")
     ap.add_argument("--eval", default=None)

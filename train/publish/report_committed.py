@@ -1,7 +1,7 @@
 """Evaluate the committed policies (3 training seeds per task) beside the thesis PID and ``pid_formation``
 on 100 held-out test episodes, attach the results to their metadata and draw the README figures.
 
-    python -m train.report_committed [--out results/committed-eval] [--episodes 100]
+    python -m train.publish.report_committed [--out results/committed-eval] [--episodes 100]
 
 For each task: ``formation-env evaluate`` with the three seeds, ``pid`` and ``pid_formation`` (frozen
 Dryden turbulence sigma 1 m/s, wake on, seeds 20000000000..), written to ``OUT/<task>/``; the slim record
@@ -18,12 +18,12 @@ import json
 import shutil
 from pathlib import Path
 
-from .config import VALIDATION_SEED_BASE
-from .evaluate import evaluate
+from ..config import VALIDATION_SEED_BASE
+from ..evaluate import evaluate
 from .publish import POLICIES, attach_evaluation, plot_validation_curves
 
 TASKS = ("formation_keeping", "close_formation", "reconfiguration")
-FIGURES = Path(__file__).resolve().parents[1] / "docs" / "figures"
+FIGURES = Path(__file__).resolve().parents[2] / "docs" / "figures"
 
 
 def policy_names(task: str) -> list[str]:
@@ -31,7 +31,7 @@ def policy_names(task: str) -> list[str]:
 
 
 def main() -> None:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap = argparse.ArgumentParser(prog="python -m train.publish.report_committed", description=__doc__.splitlines()[0])
     ap.add_argument("--out", default="results/committed-eval")
     ap.add_argument("--episodes", type=int, default=100)
     ap.add_argument("--tasks", nargs="+", default=list(TASKS), choices=TASKS)

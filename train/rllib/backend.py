@@ -1,17 +1,17 @@
 """Multi-agent PPO on Ray RLlib, on this machine or on an existing Ray cluster.
 
 ``formation-env train --backend rllib`` trains the PettingZoo ParallelEnv through RLlib's PettingZoo
-support (``train/rllib_env.py``): one policy shared by every learning UAV by default, or one policy
+support (``train/rllib/env.py``): one policy shared by every learning UAV by default, or one policy
 per role (``leader`` = vehicle 0, which flies the scenario's path; ``follower`` = the others) with
 ``policies="per-role"``. Sampling runs on ``num_env_runners`` Ray actors; the PPO update runs in the
 driver.
 
 Ray is an optional dependency (``pip install -e ".[distributed]"``). This module and its parts
 import it only inside functions, so importing them (``formation-env evaluate`` imports
-``train.rllib_checkpoints`` to recognise RLlib checkpoints) costs nothing; nothing else in the
-project imports ray. The parts: :mod:`train.rllib_config` (the run's configuration and PPOConfig),
-:mod:`train.rllib_cluster` (where Ray runs), :mod:`train.rllib_checkpoints`,
-:mod:`train.rllib_policy` (inference) and :mod:`train.rllib_bench` (sampling throughput); this
+``train.rllib.checkpoints`` to recognise RLlib checkpoints) costs nothing; nothing else in the
+project imports ray. The parts: :mod:`train.rllib.config` (the run's configuration and PPOConfig),
+:mod:`train.rllib.cluster` (where Ray runs), :mod:`train.rllib.checkpoints`,
+:mod:`train.rllib.policy` (inference) and :mod:`train.rllib.bench` (sampling throughput); this
 module holds the training loop and the run directory, and re-exports the parts' names.
 
 Where Ray runs (``address``):
@@ -52,14 +52,14 @@ import numpy as np
 
 from formation_env.errors import ClusterUnreachableError, MissingDependencyError  # noqa: F401 - re-exported
 
-from .config import _merge
-from .rllib_bench import benchmark_sampling
-from .rllib_checkpoints import (_CKPT, CHECKPOINT_META, _save_checkpoint, checkpoint_metadata, is_rllib_checkpoint,
-                                latest_rllib_checkpoint)
-from .rllib_cluster import DISTRIBUTED_INSTALL, check_reachable, connect, parse_address, require_rllib
-from .rllib_config import (LEARNING_MODES, POLICY_MODES, RLlibTrainConfig, build_algo_config, env_config_dict,
-                           load_rllib_hyperparams)
-from .rllib_policy import load_rllib_policy
+from ..config import merge_config
+from .bench import benchmark_sampling
+from .checkpoints import (_CKPT, CHECKPOINT_META, _save_checkpoint, checkpoint_metadata, is_rllib_checkpoint,
+                          latest_rllib_checkpoint)
+from .cluster import DISTRIBUTED_INSTALL, check_reachable, connect, parse_address, require_rllib
+from .config import (LEARNING_MODES, POLICY_MODES, RLlibTrainConfig, build_algo_config, env_config_dict,
+                     load_rllib_hyperparams)
+from .policy import load_rllib_policy
 
 __all__ = ["RLlibTrainConfig", "train_rllib", "load_rllib_policy", "is_rllib_checkpoint", "require_rllib",
            "connect", "parse_address", "ClusterUnreachableError", "latest_rllib_checkpoint", "benchmark_sampling",
@@ -142,7 +142,7 @@ def train_rllib(*, scenario: str | None = None, action_mode: str | None = None, 
             raise ValueError("give --scenario")
         params = load_rllib_hyperparams(scenario, config_file)
         if overrides:
-            params = _merge(params, overrides)
+            params = merge_config(params, overrides)
         cfg = RLlibTrainConfig.from_hyperparams(
             params, scenario=scenario, action_mode=action_mode, seed=seed, n_timesteps=steps, iterations=iterations,
             policies=policies, learning=learning, num_env_runners=num_env_runners,

@@ -8,8 +8,8 @@ from collections.abc import Callable
 
 import numpy as np
 
-from .rllib_cluster import connect
-from .rllib_config import RLlibTrainConfig, build_algo_config, load_rllib_hyperparams
+from .cluster import connect
+from .config import RLlibTrainConfig, build_algo_config, load_rllib_hyperparams
 
 __all__ = ["benchmark_sampling"]
 

@@ -9,8 +9,8 @@ import re
 import tempfile
 from pathlib import Path
 
-from .config import env_config_for
-from .rllib_config import RLlibTrainConfig
+from ..config import env_config_for
+from .config import RLlibTrainConfig
 
 __all__ = ["checkpoint_metadata", "latest_rllib_checkpoint", "is_rllib_checkpoint", "CHECKPOINT_META"]
 

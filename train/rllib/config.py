@@ -8,7 +8,7 @@ import math
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 
-from .config import _ENV_KEYS, HYPERPARAMS_DIR, _merge, _section, env_config_for, load_yaml
+from ..config import ENV_KEYS, HYPERPARAMS_DIR, config_section, env_config_for, load_yaml, merge_config
 
 __all__ = ["RLlibTrainConfig", "load_rllib_hyperparams", "env_config_dict", "build_algo_config", "POLICY_MODES",
            "LEARNING_MODES"]
@@ -47,7 +47,7 @@ class RLlibTrainConfig:
     def __post_init__(self) -> None:
         from formation_env.scenarios import scenario_names
 
-        from .config import ACTION_MODES
+        from ..config import ACTION_MODES
 
         if self.scenario not in scenario_names():
             raise ValueError(f"unknown scenario {self.scenario!r}; available: {scenario_names()}")
@@ -72,7 +72,7 @@ class RLlibTrainConfig:
         if isinstance(self.reward_scale, bool) or not isinstance(self.reward_scale, (int, float)) \
                 or not math.isfinite(self.reward_scale) or self.reward_scale <= 0:
             raise ValueError(f"reward_scale must be a finite number > 0, got {self.reward_scale!r}")
-        for name, valid in (("training", _PPO_KEYS), ("model", _MODEL_KEYS), ("env_kwargs", _ENV_KEYS - {"learning"})):
+        for name, valid in (("training", _PPO_KEYS), ("model", _MODEL_KEYS), ("env_kwargs", ENV_KEYS - {"learning"})):
             value = getattr(self, name)
             if not isinstance(value, dict):
                 raise ValueError(f"{name} must be a mapping, got {type(value).__name__}")
@@ -109,9 +109,9 @@ class RLlibTrainConfig:
 
 def load_rllib_hyperparams(scenario: str, config_file: str | Path | None = None) -> dict:
     """``train/hyperparams/rllib_ppo.yml`` for ``scenario``, with ``config_file`` merged over it."""
-    params = _section(load_yaml(HYPERPARAMS_DIR / "rllib_ppo.yml"), scenario)
+    params = config_section(load_yaml(HYPERPARAMS_DIR / "rllib_ppo.yml"), scenario)
     if config_file is not None:
-        params = _merge(params, _section(load_yaml(config_file), scenario))
+        params = merge_config(params, config_section(load_yaml(config_file), scenario))
     return params
 
 
@@ -130,7 +130,7 @@ def build_algo_config(cfg: RLlibTrainConfig, episode_stream: int = 0):
     from ray.rllib.core.rl_module.multi_rl_module import MultiRLModuleSpec
     from ray.rllib.core.rl_module.rl_module import RLModuleSpec
 
-    from .rllib_env import FormationMultiAgentEnv, role_policy, shared_policy
+    from .env import FormationMultiAgentEnv, role_policy, shared_policy
 
     mapping = shared_policy if cfg.policies == "shared" else role_policy
     return (

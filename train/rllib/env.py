@@ -1,6 +1,6 @@
 """The formation env as RLlib sees it: the PettingZoo ParallelEnv through RLlib's PettingZoo wrapper.
 
-This module imports ray at the top: only ``train.rllib_backend`` imports it, and only after checking
+This module imports ray at the top: only ``train.rllib.backend`` imports it, and only after checking
 that Ray RLlib is installed. Env runners on other nodes unpickle ``FormationMultiAgentEnv`` and the
 mapping functions by reference, so every node of a cluster needs this project installed.
 """
@@ -13,7 +13,7 @@ from ray.rllib.env.wrappers.pettingzoo_env import ParallelPettingZooEnv
 
 from formation_env.envs.parallel import FormationParallelEnv
 
-from .config import env_config_for
+from ..config import env_config_for
 
 __all__ = ["FormationMultiAgentEnv", "shared_policy", "role_policy", "role_of", "LEADER_AGENT", "build_env_config"]
 

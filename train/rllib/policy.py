@@ -7,9 +7,9 @@ from pathlib import Path
 
 import numpy as np
 
-from .eval_policy import EvalPolicy
-from .rllib_checkpoints import CHECKPOINT_META, latest_rllib_checkpoint
-from .rllib_cluster import require_rllib
+from ..eval_policy import EvalPolicy
+from .checkpoints import CHECKPOINT_META, latest_rllib_checkpoint
+from .cluster import require_rllib
 
 __all__ = ["load_rllib_policy"]
 

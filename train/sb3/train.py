@@ -23,10 +23,7 @@ from __future__ import annotations
 
 import csv
 import importlib.util
-import io
 import json
-import math
-import re
 import sys
 import time
 from collections.abc import Callable
@@ -34,11 +31,13 @@ from pathlib import Path
 
 import numpy as np
 
-from .config import MIN_VALIDATION_EPISODES, VALIDATION_SEED_BASE, TrainConfig, load_hyperparams, make_env_config
+from ..config import merge_config
+from .callbacks import build_callbacks
+from .config import TrainConfig, load_hyperparams, make_env_config
+from .run_files import (latest_checkpoint, run_metadata, save_checkpoint, save_model_atomic, write_curve,
+                        write_text_atomic)
 
 __all__ = ["train", "default_run_dir", "latest_checkpoint", "progress_bar_available", "build_model"]
-
-_CKPT = re.compile(r"model_(\d+)_steps\.zip$")
 
 
 def progress_bar_available() -> bool:
@@ -52,37 +51,6 @@ def tensorboard_available() -> bool:
 def default_run_dir(scenario: str, algo: str, action_mode: str, seed: int, root: str | Path = "runs") -> Path:
     stamp = time.strftime("%Y%m%d-%H%M%S")
     return Path(root) / f"{scenario}-{algo}-{action_mode}-seed{seed}-{stamp}"
-
-
-def save_model_atomic(model, path: Path) -> Path:
-    """``model.save`` to a temporary name in the same directory, then rename into place (the run's
-    own files are replaced: checkpoints and final/best models belong to this run)."""
-    from formation_env.io import atomic_write
-
-    return atomic_write(path, lambda tmp: model.save(str(tmp)), overwrite=True)
-
-
-def _save_buffer_atomic(model, path: Path) -> None:
-    from formation_env.io import atomic_write
-
-    atomic_write(path, lambda tmp: model.save_replay_buffer(str(tmp)), overwrite=True)
-
-
-def _write_text_atomic(path: Path, text: str) -> None:
-    from formation_env.io import atomic_write_text
-
-    atomic_write_text(path, text, overwrite=True)
-
-
-def latest_checkpoint(run_dir: str | Path) -> tuple[Path, int] | None:
-    ckdir = Path(run_dir) / "checkpoints"
-    if not ckdir.is_dir():
-        return None
-    found = [(int(m.group(1)), p) for p in ckdir.iterdir() if (m := _CKPT.match(p.name))]
-    if not found:
-        return None
-    steps, path = max(found)
-    return path, steps
 
 
 def _algo_class(algo: str):
@@ -143,150 +111,6 @@ def make_train_env(cfg: TrainConfig, seed: int):
     return ScaleReward(env)
 
 
-def _meta(cfg: TrainConfig, steps: int, extra: dict | None = None) -> dict:
-    env = make_env_config(cfg)
-    d = {"algo": cfg.algo, "scenario": cfg.scenario, "action_mode": cfg.action_mode, "control_hz": env.control_hz,
-         "seed": cfg.seed, "num_timesteps": int(steps)}
-    if extra:
-        d.update(extra)
-    return d
-
-
-def _callbacks(cfg: TrainConfig, run_dir: Path, state: dict, log: Callable[[str], None], progress_bar: bool):
-    from stable_baselines3.common.callbacks import BaseCallback
-
-    from .eval_episodes import eval_env_config, run_episodes
-    from .eval_summary import selection_score, summarise
-
-    class Curve(BaseCallback):
-        """Records every finished training episode (from infos['episode']) for curve.csv."""
-
-        def _on_step(self) -> bool:
-            for info in self.locals.get("infos", ()):
-                ep = info.get("episode")
-                if ep is not None:
-                    state["curve"].append((int(self.num_timesteps), round(float(ep["r"]), 6), int(ep["l"])))
-            return True
-
-    class Checkpoint(BaseCallback):
-        def __init__(self):
-            super().__init__()
-            self.next = (state["start_steps"] // cfg.checkpoint_freq + 1) * cfg.checkpoint_freq if cfg.checkpoint_freq else None
-
-        def _on_step(self) -> bool:
-            if self.next is not None and self.num_timesteps >= self.next:
-                self.next += cfg.checkpoint_freq * max(1, math.ceil((self.num_timesteps - self.next + 1) / cfg.checkpoint_freq))
-                save_checkpoint(self.model, run_dir, state)
-            return True
-
-    class Evaluate(BaseCallback):
-        """Validation (model selection) on held-out seeds; keeps the best model (lowest selection score).
-
-        The validation episodes are drawn exactly like the test set of ``formation-env evaluate``: the
-        same ``eval_env_config`` with its defaults (wake on, Dryden sigma 1 m/s, no other randomisation,
-        the scenario's duration), whatever the training's ``env_kwargs`` (turbulence, wake, initial
-        offsets, randomisation) say; only the seeds differ (``VALIDATION_SEED_BASE + i`` vs
-        ``TEST_SEED_BASE + i``, both out of the training's range). ``eval_episodes`` of them (32 by
-        default). One exception, logged: a run whose ``env_kwargs`` shortens the episodes
-        (``duration_s``: quick development runs, the tests) validates on episodes of that length, with
-        the same seeds and conditions (like ``formation-env evaluate --duration``)."""
-
-        def __init__(self):
-            super().__init__()
-            from formation_env.scenarios import get_scenario
-
-            self.next = (state["start_steps"] // cfg.eval_freq + 1) * cfg.eval_freq if cfg.eval_freq else None
-            env = make_env_config(cfg)
-            full = get_scenario(cfg.scenario).duration_s
-            short = env.duration_s if env.duration_s is not None and env.duration_s < full else None
-            self.config = eval_env_config(cfg.scenario, cfg.action_mode, control_hz=env.control_hz, duration_s=short)
-            self.seeds = [VALIDATION_SEED_BASE + i for i in range(cfg.eval_episodes)]
-            if short is not None:
-                log(f"note: validation episodes cut to {short:g} s like the training's (the test set flies {full:g} s)")
-            if cfg.eval_episodes < MIN_VALIDATION_EPISODES:
-                log(f"note: validation on {cfg.eval_episodes} episodes (< {MIN_VALIDATION_EPISODES}): the model "
-                    "selection follows noise more than skill")
-
-        def _on_step(self) -> bool:
-            if self.next is not None and self.num_timesteps >= self.next:
-                self.next += cfg.eval_freq * max(1, math.ceil((self.num_timesteps - self.next + 1) / cfg.eval_freq))
-                self.evaluate()
-            return True
-
-        def evaluate(self) -> None:
-            model = self.model
-            summ = summarise(run_episodes(lambda o: model.predict(o, deterministic=True)[0], self.config, self.seeds))
-            score = selection_score(summ)
-            entry = {"num_timesteps": int(self.num_timesteps), "score": score, **summ}
-            state["evaluations"].append(entry)
-            for k in ("rms_slot_error_m", "return", "collisions", "reconfig_success_rate", "min_separation_m",
-                      "induced_drag_saving", "box_outside_over_1s"):
-                if k in summ:
-                    self.logger.record(f"eval/{k}", summ[k])
-            best = state.get("best_score")
-            if best is None or score < best:
-                state["best_score"], state["best_steps"] = score, int(self.num_timesteps)
-                save_model_atomic(model, run_dir / "best_model.zip")
-                _write_text_atomic(run_dir / "best_model.json",
-                                   json.dumps(_meta(cfg, self.num_timesteps, {"validation": entry}), indent=2) + "\n")
-            _write_text_atomic(run_dir / "evaluations.json", json.dumps(state["evaluations"], indent=2) + "\n")
-            log(f"[eval] steps {self.num_timesteps}: RMS slot error {summ['rms_slot_error_m']:.3f} m, "
-                f"collisions {summ['collisions']}, crashes {summ['crashes']}"
-                + (f", reconfig success {summ['reconfig_success_rate']:.2f}" if "reconfig_success_rate" in summ else "")
-                + (f", saving {summ['induced_drag_saving']:.3f}, >1 s outside the box {summ['box_outside_over_1s']}"
-                   if "box_outside_over_1s" in summ else "")
-                + f", score {score:.3f} (best {state['best_score']:.3f} at {state['best_steps']})")
-
-    class Progress(BaseCallback):
-        """A plain progress line (when tqdm/rich are missing or the bar is off)."""
-
-        def __init__(self):
-            super().__init__()
-            self.every = max(1, (state["total"] - state["start_steps"]) // 20)
-            self.next = state["start_steps"] + self.every
-            self.t0 = time.perf_counter()
-
-        def _on_step(self) -> bool:
-            if self.num_timesteps >= self.next:
-                self.next += self.every
-                recent = [r for _, r, _ in state["curve"][-50:]]
-                rate = (self.num_timesteps - state["start_steps"]) / max(time.perf_counter() - self.t0, 1e-9)
-                log(f"steps {self.num_timesteps}/{state['total']} ({rate:.0f}/s)"
-                    + (f", mean return (last {len(recent)} episodes) {np.mean(recent):.1f}" if recent else ""))
-            return True
-
-    cbs = [Curve(), Checkpoint()]
-    ev = Evaluate() if cfg.eval_freq else None
-    if ev is not None:
-        cbs.append(ev)
-    if not progress_bar:
-        cbs.append(Progress())
-    return cbs, ev
-
-
-def _write_curve(run_dir: Path, rows) -> None:
-    buf = io.StringIO()
-    w = csv.writer(buf, lineterminator="\n")
-    w.writerow(["num_timesteps", "episode_return", "episode_length"])
-    w.writerows(rows)
-    _write_text_atomic(run_dir / "curve.csv", buf.getvalue())
-
-
-def save_checkpoint(model, run_dir: Path, state: dict) -> Path:
-    ckdir = run_dir / "checkpoints"
-    path = save_model_atomic(model, ckdir / f"model_{model.num_timesteps}_steps.zip")
-    if hasattr(model, "replay_buffer") and model.replay_buffer is not None:
-        buf = ckdir / "replay_buffer.pkl"
-        _save_buffer_atomic(model, buf)
-    _write_curve(run_dir, state["curve"])
-    state["last_checkpoint"] = int(model.num_timesteps)
-    _write_text_atomic(run_dir / "checkpoint_state.json",
-                       json.dumps({"num_timesteps": int(model.num_timesteps), "best_score": state.get("best_score"),
-                                   "best_steps": state.get("best_steps"), "n_curve_rows": len(state["curve"]),
-                                   "n_evaluations": len(state["evaluations"])}, indent=2) + "\n")
-    return path
-
-
 def train(*, scenario: str | None = None, algo: str | None = None, action_mode: str = "residual", seed: int = 0,
           steps: int | None = None, config_file: str | Path | None = None, out_dir: str | Path | None = None,
           overwrite: bool = False, resume: bool = False, progress_bar: bool | None = None,
@@ -324,14 +148,12 @@ def train(*, scenario: str | None = None, algo: str | None = None, action_mode: 
             raise ValueError("give --scenario and --algo")
         params = load_hyperparams(algo, scenario, config_file)
         if overrides:
-            from .config import _merge
-
-            params = _merge(params, overrides)
+            params = merge_config(params, overrides)
         cfg = TrainConfig.from_hyperparams(params, scenario=scenario, algo=algo, action_mode=action_mode, seed=seed,
                                            n_timesteps=steps)
         run_dir = Path(out_dir) if out_dir is not None else default_run_dir(scenario, algo, action_mode, seed)
         run_dir = prepare_output_dir(run_dir, overwrite=overwrite)
-        _write_text_atomic(run_dir / "config.yaml", yaml.safe_dump(
+        write_text_atomic(run_dir / "config.yaml", yaml.safe_dump(
             {"command": command, "config": cfg.to_dict()}, sort_keys=False))
         ck = None
 
@@ -381,7 +203,7 @@ def train(*, scenario: str | None = None, algo: str | None = None, action_mode: 
 
     formats = ["csv"] + (["tensorboard"] if tensorboard_available() else [])
     model.set_logger(configure(str(log_dir), formats))
-    callbacks, _ = _callbacks(cfg, run_dir, state, log, progress_bar)
+    callbacks, _ = build_callbacks(cfg, run_dir, state, log, progress_bar)
     log(f"training {cfg.algo} on {cfg.scenario} ({cfg.action_mode} actions), seed {cfg.seed}, {cfg.n_timesteps} steps, "
         f"{cfg.n_formations} formations -> {run_dir}")
     t0 = time.perf_counter()
@@ -389,19 +211,19 @@ def train(*, scenario: str | None = None, algo: str | None = None, action_mode: 
                 reset_num_timesteps=ck is None, progress_bar=progress_bar)
     wall = time.perf_counter() - t0
     save_model_atomic(model, run_dir / "final_model.zip")
-    _write_text_atomic(run_dir / "final_model.json", json.dumps(_meta(cfg, model.num_timesteps), indent=2) + "\n")
+    write_text_atomic(run_dir / "final_model.json", json.dumps(run_metadata(cfg, model.num_timesteps), indent=2) + "\n")
     if cfg.checkpoint_freq:
         save_checkpoint(model, run_dir, state)
-    _write_curve(run_dir, state["curve"])
+    write_curve(run_dir, state["curve"])
     if state["evaluations"]:
-        _write_text_atomic(run_dir / "evaluations.json", json.dumps(state["evaluations"], indent=2) + "\n")
+        write_text_atomic(run_dir / "evaluations.json", json.dumps(state["evaluations"], indent=2) + "\n")
     summary = {"run_dir": str(run_dir), "algo": cfg.algo, "scenario": cfg.scenario, "action_mode": cfg.action_mode,
                "seed": cfg.seed, "num_timesteps": int(model.num_timesteps), "resumed_from": state["start_steps"] or None,
                "wall_s": round(wall, 1), "steps_per_s": round((model.num_timesteps - state["start_steps"]) / max(wall, 1e-9), 1),
                "best_score": state["best_score"], "best_steps": state["best_steps"], "episodes": len(state["curve"]),
                "torch_threads": cfg.torch_threads, "tensorboard": tensorboard_available()}
     name = "summary.json" if ck is None else f"summary-resume-{state['start_steps']}.json"
-    _write_text_atomic(run_dir / name, json.dumps(summary, indent=2) + "\n")
+    write_text_atomic(run_dir / name, json.dumps(summary, indent=2) + "\n")
     log(f"done in {wall:.0f} s: {summary['num_timesteps']} steps, best validation score {state['best_score']} "
         f"at {state['best_steps']} -> {run_dir}")
     return summary

@@ -1,0 +1,5 @@
+"""``python -m train.publish RUN_DIR NAME [...]``: :func:`train.publish.publish.main`."""
+
+from .publish import main
+
+main()
