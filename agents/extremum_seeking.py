@@ -19,7 +19,7 @@ The thesis PID flies the set-point (the env's ``setpoints`` action mode, mapped 
 and the along-track station is held by :class:`agents.pid_formation.PIDFormation`'s speed channel
 (wind feed-forward, PD and integral on the along-track error): the along-track set-point is fixed in
 wake surfing, and the thesis tracker's proportional along-track loop alone lags 8 m per 1 m/s of
-wind. The gains were tuned on training seeds (``train/wake_surfing_eval.py --tune-es``;
+wind. The gains were tuned on training seeds (``train/evaluation/wake_surfing_eval.py --tune-es``;
 docs/wake_surfing.md has the sweep and its numbers).
 """
 
@@ -38,7 +38,7 @@ __all__ = ["ExtremumSeekingGains", "ExtremumSeeking"]
 @dataclass(frozen=True)
 class ExtremumSeekingGains:
     """ES parameters (SI: m, s, rad/s). The defaults are the sweep's best on 16 training-range episodes
-    (``python -m train.wake_surfing_eval --tune-es``; docs/wake_surfing.md)."""
+    (``python -m train.evaluation.wake_surfing_eval --tune-es``; docs/wake_surfing.md)."""
 
     amplitude_y_m: float = 0.35  # lateral dither amplitude
     amplitude_z_m: float = 0.12  # vertical dither amplitude

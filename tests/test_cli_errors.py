@@ -191,7 +191,7 @@ def test_duration_caps_agree():
     from formation_env.cli._args import MAX_DURATION_S, MAX_GIF_FRAMES
     from formation_env.replay.animation import MAX_FRAMES
     from formation_env.runs.runner import MAX_DURATION_S as RUNNER_MAX
-    from train.evaluate import MAX_DURATION_S as EVAL_MAX
+    from train.evaluation.evaluate import MAX_DURATION_S as EVAL_MAX
 
     assert MAX_DURATION_S == RUNNER_MAX == EVAL_MAX == 3600.0
     assert MAX_GIF_FRAMES == MAX_FRAMES

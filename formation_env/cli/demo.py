@@ -78,7 +78,7 @@ def _policy_comparison(out, overwrite: bool) -> bool:
         print(f"no committed {DEMO_POLICY_SCENARIO} policy: skipping the policy comparison")
         return True
     try:
-        from train.evaluate import evaluate
+        from train.evaluation.evaluate import evaluate
     except ModuleNotFoundError as exc:  # the RL extra is not installed
         print(f"policy comparison skipped ({exc}); install with pip install -e '.[rl]'")
         return True

@@ -25,7 +25,7 @@ def _nonneg_float(text: str) -> float:
 
 def register(sub) -> None:
     from train.config import ACTION_MODES, TEST_SEED_BASE
-    from train.evaluate import TEST_EPISODES
+    from train.evaluation.evaluate import TEST_EPISODES
 
     from ..scenarios import scenario_names
 
@@ -59,7 +59,7 @@ def register(sub) -> None:
 
 
 def run(args) -> int:
-    from train.evaluate import TEST_EPISODES, evaluate
+    from train.evaluation.evaluate import TEST_EPISODES, evaluate
 
     if args.episodes is not None and args.episodes < 1:
         raise ValueError(f"--episodes must be >= 1, got {args.episodes}")

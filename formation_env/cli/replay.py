@@ -6,7 +6,7 @@ Who flies is ``--policy``: ``pid`` (the thesis FCS on every UAV, the scenario's 
 the default), ``pid_formation`` (the classical formation-keeping PID on the followers), an SB3 ``.zip``
 (its sidecar JSON / run config.yaml gives the action mode and the default scenario) or an RLlib
 checkpoint directory (needs ray). Learned and ``pid_formation`` policies fly the evaluation episode
-(:func:`train.eval_episodes.eval_env_config`: wake on, frozen Dryden turbulence ``--turbulence``) with
+(:func:`train.evaluation.episodes.eval_env_config`: wake on, frozen Dryden turbulence ``--turbulence``) with
 seed ``--seed``, so a replay is reproducible and matches ``formation-env evaluate --seeds SEED``.
 """
 
@@ -96,7 +96,7 @@ def _progress(enabled: bool | None, total: int, desc: str):
 
 def _fly_policy(policy, scenario: str, *, seed: int, wake: bool, turbulence: float, duration_s):
     """One evaluation episode of ``policy`` (the rollout's Policy protocol) recorded at the decision rate."""
-    from train.eval_episodes import eval_env_config
+    from train.evaluation.episodes import eval_env_config
 
     from ..replay import EpisodeRecorder
     from ..rollout import Recorder, rollout
@@ -159,14 +159,14 @@ def run(args) -> int:
     pol = None
     if learned:
         try:
-            from train.evaluation.policy_loader import _policy_metadata, load_policy
+            from train.evaluation.policy_loader import policy_metadata, load_policy
         except ModuleNotFoundError as exc:
             raise ValueError(f"--policy {policy_spec!r} needs the RL extra ({exc}); pip install -e '.[rl]'") from None
         from pathlib import Path
 
         scenario = args.scenario
         if scenario is None and policy_spec != "pid_formation":
-            scenario = _trained_scenario(Path(policy_spec), _policy_metadata)
+            scenario = _trained_scenario(Path(policy_spec), policy_metadata)
         if scenario is None:
             raise ValueError(f"--scenario is required with --policy {policy_spec!r}" +
                              ("" if policy_spec == "pid_formation" else " (no scenario in the policy's metadata)"))

@@ -38,6 +38,7 @@ from ..wake import WakeModel
 from ..wake.loads import isolated_model
 from .config import EnvConfig
 from .formation import WakeConfig, wake_model_for, wing_origin_body
+from .infos import INFO_REWARD_KEYS, InfoArrays, finite_values, reward_info_key, separation_each
 from .observe import REWARD_TERMS, observation_size
 from .params import (ACTION_MODE_CODES, RESIDUAL_SCALE, ActionParams, RewardParams, StepParams, aircraft_arrays,
                      safe_box_arrays, scenario_arrays, setpoint_ranges, setpoint_speed_range, slot_error_axes,
@@ -48,21 +49,8 @@ from .step import observe, refresh, step
 __all__ = ["Simulation", "SimOutput", "InfoArrays", "RESET_OPTIONS", "INFO_REWARD_KEYS", "reward_info_key",
            "separation_each"]
 
-_REWARD_TERM_NAMES = (*REWARD_TERMS, "total")
-
 #: the options :meth:`Simulation.reset` takes (an unknown one is a ``TypeError``)
 RESET_OPTIONS = ("steady_wind_ned",)
-
-
-def reward_info_key(term: str) -> str:
-    """The flat info key of a reward term: ``"slot"`` -> ``"reward_slot"`` (``"total"``: the reward itself)."""
-    if term not in _REWARD_TERM_NAMES:
-        raise ValueError(f"unknown reward term {term!r}; terms: {list(_REWARD_TERM_NAMES)}")
-    return f"reward_{term}"
-
-
-#: the flat info keys of the reward's terms, in REWARD_TERMS order, then ``reward_total``
-INFO_REWARD_KEYS = tuple(reward_info_key(t) for t in _REWARD_TERM_NAMES)
 
 
 def surface_scale(limit_rad: float) -> np.ndarray:
@@ -82,103 +70,6 @@ class SimOutput(NamedTuple):
     terminated: np.ndarray  # (B,) bool: collision or a UAV left the envelope
     truncated: np.ndarray  # (B,) bool: time limit reached (and not terminated)
     info: "InfoArrays"  # every info quantity as arrays with the batch axis
-
-
-class InfoArrays:
-    """The info quantities of all formations as arrays (B, V, ...), read from the simulation's state at
-    access time (nothing is computed unless read). Never NaN: a diverged UAV's values read as its last
-    finite ones (the kernel's outputs) or 0."""
-
-    def __init__(self, sim: "Simulation") -> None:
-        self._sim = sim
-
-    @property
-    def time_s(self) -> np.ndarray:
-        """(B,) episode time, s."""
-        return self._sim.time_s
-
-    @property
-    def slot_error_m(self) -> np.ndarray:
-        """(B, V) distance from the slot, m: slot-frame components weighted by the scenario's axes
-        (along-track only with a safe box); the reward's definition, the same at reset and after a step."""
-        return self._sim.output.slot_error_m
-
-    @property
-    def slot_error_ned_m(self) -> np.ndarray:
-        """(B, V, 3) position minus demanded position, m NED."""
-        s = self._sim.state
-        return s.aircraft[..., POS] - s.position_demand
-
-    @property
-    def min_separation_m(self) -> np.ndarray:
-        """(B, V) distance to the nearest other UAV, m (inf alone)."""
-        s, out = self._sim.state, self._sim.output
-        return np.stack([separation_each(s.aircraft[i], out.separation_m[i]) for i in range(s.aircraft.shape[0])])
-
-    @property
-    def induced_wind_ned_mps(self) -> np.ndarray:
-        """(B, V, 3) ELL effective induced wind, m/s NED."""
-        return self._sim.state.induced_wind_ned
-
-    @property
-    def induced_omega_body_rad_s(self) -> np.ndarray:
-        """(B, V, 3) ELL effective rotational wind, rad/s body."""
-        return self._sim.state.induced_omega_body
-
-    @property
-    def fuel_kg(self) -> np.ndarray:
-        """(B, V) fuel on board, kg."""
-        return self._sim.state.aircraft[..., 13]
-
-    @property
-    def gust_ned_mps(self) -> np.ndarray:
-        """(B, V, 3) turbulence at each UAV, m/s NED."""
-        return self._sim.state.gust_ned
-
-    @property
-    def steady_wind_ned_mps(self) -> np.ndarray:
-        """(B, 3) the episode's steady wind, m/s NED."""
-        return self._sim.state.steady_wind
-
-    @property
-    def velocity_demand_ned_mps(self) -> np.ndarray:
-        """(B, V, 3) demanded ground velocities, m/s NED (vehicle 0's: the leader's demanded track)."""
-        return self._sim.state.velocity_demand
-
-    @property
-    def status(self) -> np.ndarray:
-        """(B, V) int64 envelope status bits of the last physics step (0: inside)."""
-        return self._sim.state.status
-
-    @property
-    def collision(self) -> np.ndarray:
-        """(B,) bool: the last decision ended in a collision."""
-        return self._sim.output.collided
-
-    @property
-    def crashed(self) -> np.ndarray:
-        """(B, V) bool: the UAV left the envelope (or diverged) during the last decision."""
-        return self._sim.output.crashed
-
-    @property
-    def command(self) -> np.ndarray:
-        """(B, V, 4) controls of the last physics step: elevator, aileron, rudder rad, throttle 0..1."""
-        return self._sim.state.command
-
-    @property
-    def induced_drag_saving(self) -> np.ndarray:
-        """(B, V) induced-drag saving against the same UAV alone (0 unless the benefit is on)."""
-        return self._sim.output.saving
-
-    @property
-    def box_depth_m(self) -> np.ndarray:
-        """(B, V) distance outside the UAV's safe box, m (0 inside or without a box)."""
-        return self._sim.output.box_depth_m
-
-    @property
-    def reward_terms(self) -> np.ndarray:
-        """(B, V, T) the last decision's reward terms in REWARD_TERMS order (0 after a reset)."""
-        return self._sim.output.reward_terms
 
 
 class Simulation:
@@ -442,7 +333,7 @@ class Simulation:
                 info[key] = float(terms[v, j])
             info[INFO_REWARD_KEYS[-1]] = float(out.reward[i, v])
             if not clean:
-                _finite_values(info)
+                finite_values(info)
             result.append(info)
         return result
 
@@ -495,33 +386,3 @@ class Simulation:
         """Formation ``index``'s last reward terms, name -> (V,)."""
         t = self.output.reward_terms[index]
         return {**{k: t[:, j] for j, k in enumerate(REWARD_TERMS)}, "total": self.output.reward[index]}
-
-
-def separation_each(x: np.ndarray, fallback: np.ndarray | None = None) -> np.ndarray:
-    """(V,) distance from each UAV of one formation (x: (V, 16) states) to its nearest neighbour, m (inf
-    alone); never NaN.
-
-    Pairs with a non-finite position (a UAV that diverged: its episode is ending) are left out;
-    a UAV with no finite pair gets ``fallback`` (the decision step's separation at the last finite
-    positions, ``StepOutput.separation_m``) where that is not NaN, else inf."""
-    with np.errstate(invalid="ignore", over="ignore"):
-        d = np.linalg.norm(x[:, None, POS] - x[None, :, POS], axis=-1)
-    d[~np.isfinite(d)] = np.inf
-    np.fill_diagonal(d, np.inf)
-    sep = d.min(axis=1)
-    if fallback is not None and x.shape[0] > 1:
-        fb = np.asarray(fallback, dtype=float)
-        sep = np.where(~np.isfinite(sep) & ~np.isnan(fb), fb, sep)
-    return sep
-
-
-def _finite_values(info: dict) -> None:
-    """Infos never carry NaN or inf from a diverged UAV (its state is non-finite on the step that ends
-    its episode): non-finite numbers become 0.0 and non-finite array entries 0.0, except
-    ``min_separation_m``, which stays inf for a lone UAV (no neighbour)."""
-    for key, value in info.items():
-        if isinstance(value, float):
-            if not math.isfinite(value) and not (key == "min_separation_m" and value == math.inf):
-                info[key] = 0.0
-        elif isinstance(value, np.ndarray) and value.dtype.kind == "f" and not np.all(np.isfinite(value)):
-            info[key] = np.where(np.isfinite(value), value, 0.0)

@@ -1,6 +1,6 @@
 """The thesis's scenarios (chapter 6, Appendix A.5.3) and this project's N-UAV formations as tasks: posed
 by the EnvConfig defaults, judged against the thesis PID and ``pid_formation`` on the generic evaluation
-table (:mod:`train.evaluate`). Their scenarios are data in :mod:`formation_env.scenarios.definitions`."""
+table (:mod:`train.evaluation.evaluate`). Their scenarios are data in :mod:`formation_env.scenarios.definitions`."""
 
 from __future__ import annotations
 

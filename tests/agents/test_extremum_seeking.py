@@ -11,7 +11,7 @@ from formation_env.tasks import make_config
 from formation_env.scenarios import get_scenario
 from formation_env.sim.params import setpoint_ranges, setpoint_speed_range
 from formation_env.tasks.wake_surfing.optimum import reference_optimum
-from train.wake_surfing_rollout import fly
+from train.evaluation.wake_surfing_rollout import fly
 
 B = 2.9
 SC = get_scenario("wake_surfing")

@@ -174,7 +174,7 @@ def test_separation_barrier_acts_before_the_collision_radius():
 # ------------------------------------------------------------------ pid_formation
 def test_pid_formation_holds_the_slot_in_calm_air_and_beats_the_thesis_pid_in_gusts():
     from agents.pid_formation import PIDFormation
-    from train.evaluate import eval_env_config, run_episodes, summarise
+    from train.evaluation.evaluate import eval_env_config, run_episodes, summarise
 
     calm = eval_env_config("formation_keeping", "setpoints", turbulence_sigma_mps=0.0, duration_s=30.0)
     agent = PIDFormation()

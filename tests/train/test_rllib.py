@@ -336,7 +336,7 @@ def test_missing_ray_gives_the_install_command(capsys, monkeypatch, tmp_path):
 
 def test_nothing_outside_the_backend_imports_ray():
     code = ("import sys, formation_env, formation_env.envs, formation_env.cli, formation_env.runs.runner, "
-            "agents.run, train.sb3.train, train.evaluate, train.rllib.backend\n"
+            "agents.run, train.sb3.train, train.evaluation.evaluate, train.rllib.backend\n"
             "formation_env.cli.build_parser()\n"
             "env = formation_env.parallel_env('formation_keeping'); env.reset(seed=0)\n"
             "print('ray' in sys.modules)")

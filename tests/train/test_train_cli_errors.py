@@ -4,7 +4,7 @@ import pytest
 
 from formation_env.cli import main
 from train.sb3.config import TrainConfig, load_hyperparams
-from train.evaluate import evaluate, load_policy
+from train.evaluation.evaluate import evaluate, load_policy
 from train.sb3.train import train
 
 

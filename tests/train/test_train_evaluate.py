@@ -11,11 +11,11 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-import train.evaluate as ev
+import train.evaluation.evaluate as ev
 from formation_env.cli import main
 from train.config import TEST_SEED_BASE, VALIDATION_SEED_BASE
 from formation_env.rollout import ZeroPolicy
-from train.evaluate import EvalPolicy, eval_env_config, evaluate, load_policy, run_episodes
+from train.evaluation.evaluate import EvalPolicy, eval_env_config, evaluate, load_policy, run_episodes
 
 POLICIES = Path(__file__).resolve().parents[2] / "train" / "policies"
 COMMITTED = sorted(POLICIES.glob("*.zip"))

@@ -1,4 +1,4 @@
-"""The wake-surfing evaluation (train.wake_surfing_eval, train.wake_surfing_rollout): the task preset
+"""The wake-surfing evaluation (train.evaluation.wake_surfing_eval, train.evaluation.wake_surfing_rollout): the task preset
 is what training uses, the statistics helpers have the right signs, and every controller flies."""
 
 import dataclasses
@@ -11,9 +11,9 @@ import pytest
 from formation_env.envs.config import Randomisation, RewardWeights
 from formation_env.tasks.wake_surfing import WAKE_SURFING_RANDOMISATION, WAKE_SURFING_REWARD
 from train.sb3.config import load_hyperparams
-from train.eval_episodes import longest_run, eval_env_config
-from train.wake_surfing_eval import paired_gain, summarise_surfer
-from train.wake_surfing_rollout import es_surfer, fly, oracle_surfer, pid_formation_surfer, pid_surfer, sb3_surfer
+from train.evaluation.episodes import longest_run, eval_env_config
+from train.evaluation.wake_surfing_eval import paired_gain, summarise_surfer
+from train.evaluation.wake_surfing_rollout import es_surfer, fly, oracle_surfer, pid_formation_surfer, pid_surfer, sb3_surfer
 
 POLICY = Path(__file__).resolve().parents[2] / "train" / "policies" / "wake_surfing_ppo_setpoints_seed2.zip"
 
@@ -70,7 +70,7 @@ def test_every_controller_flies_and_the_policy_beats_the_pid():
 
 
 def test_command_line_errors_exit_2_with_one_line(tmp_path, capsys):
-    from train.wake_surfing_eval import main
+    from train.evaluation.wake_surfing_eval import main
 
     bad = tmp_path / "bad.zip"
     bad.write_text("not a zip")

@@ -9,7 +9,7 @@ from pathlib import Path
 import numpy as np
 
 from ..config import ACTION_MODES
-from ..eval_policy import EvalPolicy
+from .policy import EvalPolicy
 from ..sb3.config import ALGOS
 
 __all__ = ["load_policy"]
@@ -33,7 +33,7 @@ def _pid_formation_policy() -> EvalPolicy:
     return EvalPolicy("pid_formation", str(agent.action_mode), agent.act, float(agent.control_hz), reset=agent.reset)
 
 
-def _policy_metadata(path: Path) -> dict:
+def policy_metadata(path: Path) -> dict:
     """Metadata of a policy zip: its sidecar ``<stem>.json``, else its run's ``config.yaml``."""
     side = path.with_suffix(".json")
     if side.is_file():
@@ -75,7 +75,7 @@ def load_policy(spec: str, *, action_mode: str | None = None, name: str | None =
     if not path.is_file():
         raise ValueError(f"policy file {spec!r} does not exist (give an SB3 .zip, an RLlib checkpoint directory, "
                          "'pid' or 'pid_formation')")
-    meta = _policy_metadata(path)
+    meta = policy_metadata(path)
     mode = action_mode or meta.get("action_mode")
     if mode is None:
         raise ValueError(f"policy {spec!r}: its action mode is unknown (no {path.with_suffix('.json').name} or "

@@ -113,7 +113,7 @@ def groups_table(groups: dict[str, dict]) -> str:
     return "\n".join(lines) + "\n"
 
 
-def _plots(out_dir: Path, results: dict[str, dict], scenario: str, *, overwrite: bool) -> list[str]:
+def write_plots(out_dir: Path, results: dict[str, dict], scenario: str, *, overwrite: bool) -> list[str]:
     import matplotlib
 
     matplotlib.use("Agg")

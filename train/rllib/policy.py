@@ -1,4 +1,4 @@
-"""Inference: an RLlib checkpoint of this project as an :class:`~train.eval_policy.EvalPolicy`."""
+"""Inference: an RLlib checkpoint of this project as an :class:`~train.evaluation.policy.EvalPolicy`."""
 
 from __future__ import annotations
 

@@ -53,7 +53,7 @@ WAKE_SURFING_REWARD = RewardWeights(slot=1.0, progress=1.0, benefit=10.0, box=10
 WAKE_SURFING_RANDOMISATION = Randomisation(turbulence_sigma_mps=0.25, crosswind_mps=5.0, leader_turn_deg=30.0,
                                            leader_speed_mps=1.0)
 #: the controllers the task is judged against (agents/ and train/ build them by these names); the oracle
-#: set-point ceilings (train.wake_surfing_rollout.oracle_policy) are reported beside them, not as baselines
+#: set-point ceilings (train.evaluation.wake_surfing_rollout.oracle_policy) are reported beside them, not as baselines
 BASELINES = ("pid", "pid_formation", "extremum_seeking")
 
 TASK = register_task(Task(

@@ -1,6 +1,6 @@
 """Wake-surfing evaluation (issue 16): the committed policies against the thesis PID and
 ``pid_formation`` at the nominal slot and the extremum seeker, on 100 held-out episodes, each measured
-against its reference optimum (:mod:`train.wake_surfing_rollout`).
+against its reference optimum (:mod:`train.evaluation.wake_surfing_rollout`).
 
 Statistics (95 %, percentile bootstrap over episodes, 10,000 resamples from seed 0; Wilson for rates):
 per controller the mean saving and the mean of the per-episode ratio to the reference optimum with
@@ -10,7 +10,7 @@ the smallest separation. Paired by episode: each policy (and the three training 
 episode) against each baseline, the gain in saving ratio (policy - baseline) and, against extremum
 seeking, the time saved to 80 % (extremum seeking - policy).
 
-``python -m train.wake_surfing_eval POLICY.zip [...] --out DIR`` (a new directory) writes
+``python -m train.evaluation.wake_surfing_eval POLICY.zip [...] --out DIR`` (a new directory) writes
 ``results.json``, ``results.md`` and, with ``--figure PATH``, the saving map with the trajectories.
 ``--tune-es`` runs the extremum seeker's gain sweep on training seeds instead (docs/wake_surfing.md).
 """
@@ -27,8 +27,8 @@ from pathlib import Path
 
 import numpy as np
 
-from .config import TEST_SEED_BASE
-from .evaluation.stats import N_BOOT, bootstrap_ci, paired_comparison, wilson_interval
+from ..config import TEST_SEED_BASE
+from .stats import N_BOOT, bootstrap_ci, paired_comparison, wilson_interval
 from .wake_surfing_rollout import es_surfer, fly, oracle_surfer, pid_formation_surfer, pid_surfer, sb3_surfer
 
 __all__ = ["evaluate_wake_surfing", "summarise_surfer", "paired_gain", "tune_es", "plot_surfing_figure", "main"]
@@ -101,9 +101,9 @@ def evaluate_wake_surfing(policies, *, episodes: int = 100, seeds=None, es_gains
                           turbulence_sigma_mps: float | None = None, oracle_margins_b=(), log=print) -> dict:
     """Every policy (SB3 zips) and the three baselines on the same held-out episodes; the report.
     ``turbulence_sigma_mps`` replaces the task's Dryden level (None: the task's); ``oracle_margins_b``
-    adds the oracle set-point ceilings (:func:`train.wake_surfing_rollout.oracle_surfer`), reported
+    adds the oracle set-point ceilings (:func:`train.evaluation.wake_surfing_rollout.oracle_surfer`), reported
     beside the controllers but compared with none."""
-    from .eval_episodes import eval_env_config
+    from .episodes import eval_env_config
 
     config = eval_env_config("wake_surfing", "setpoints", turbulence_sigma_mps=turbulence_sigma_mps)
     seeds = list(seeds) if seeds is not None else [TEST_SEED_BASE + i for i in range(episodes)]
@@ -204,7 +204,7 @@ def plot_surfing_figure(path, policy_zip: str, *, es_gains=None, crosswind_mps: 
     from formation_env.scenarios import get_scenario
     from formation_env.tasks.wake_surfing.optimum import reference_optimum, saving_in_crosswind
 
-    from .eval_episodes import eval_env_config
+    from .episodes import eval_env_config
 
     box = np.asarray(get_scenario("wake_surfing").safe_box_b)
     cfg = eval_env_config("wake_surfing", "setpoints")
@@ -264,7 +264,7 @@ def main(argv=None) -> int:
 
 
 def _main(argv=None) -> int:
-    p = argparse.ArgumentParser(prog="python -m train.wake_surfing_eval", description=__doc__.split("\n\n")[0])
+    p = argparse.ArgumentParser(prog="python -m train.evaluation.wake_surfing_eval", description=__doc__.split("\n\n")[0])
     p.add_argument("policies", nargs="*", help="SB3 zips (name them <group>_seed<k>.zip)")
     p.add_argument("--episodes", type=int, default=100)
     p.add_argument("--out", help="a new directory for results.json / results.md")

@@ -42,8 +42,8 @@ fixed seed, so the same episodes always give the same numbers):
   more), or the ``groups`` argument: each summary metric's mean, std (ddof 1), min and max across the
   seeds, and the paired comparison of the seed-averaged per-episode metric against each baseline.
 
-The parts: :mod:`train.eval_policy` (:class:`EvalPolicy`), :mod:`train.policy_loader`
-(:func:`load_policy`), :mod:`train.eval_episodes` (the episodes and their metrics),
+The parts: :mod:`train.evaluation.policy` (:class:`EvalPolicy`), :mod:`train.policy_loader`
+(:func:`load_policy`), :mod:`train.evaluation.episodes` (the episodes and their metrics),
 :mod:`train.eval_summary`, :mod:`train.comparisons` and :mod:`train.eval_report` (tables, plots).
 This module runs them (:func:`evaluate`) and re-exports their names.
 """
@@ -56,14 +56,14 @@ import time
 from collections.abc import Callable, Sequence
 from pathlib import Path
 
-from .config import TEST_SEED_BASE
-from .eval_episodes import SPAN_M, SUCCESS_WINDOW_S, eval_env_config, run_episodes
-from .eval_policy import EvalPolicy
-from .evaluation.comparisons import BASELINES, compare_episodes, comparisons, group_report, seed_groups
-from .evaluation.policy_loader import load_policy
-from .evaluation.report import _plots, comparison_table, groups_table, markdown_table
-from .evaluation.stats import N_BOOT
-from .evaluation.summary import selection_score, summarise
+from ..config import TEST_SEED_BASE
+from .episodes import SPAN_M, SUCCESS_WINDOW_S, eval_env_config, run_episodes
+from .policy import EvalPolicy
+from .comparisons import BASELINES, compare_episodes, comparisons, group_report, seed_groups
+from .policy_loader import load_policy
+from .report import write_plots, comparison_table, groups_table, markdown_table
+from .stats import N_BOOT
+from .summary import selection_score, summarise
 
 __all__ = ["EvalPolicy", "load_policy", "run_episodes", "summarise", "evaluate", "eval_env_config", "compare_episodes",
            "comparisons", "seed_groups", "group_report", "BASELINES", "TEST_EPISODES", "SUCCESS_WINDOW_S", "SPAN_M",
@@ -198,6 +198,6 @@ def evaluate(policies: Sequence[str], *, scenario: str, episodes: int = TEST_EPI
             text += "\n## Training seeds\n\n" + report["groups_markdown"]
         atomic_write_text(out / "results.md", text, overwrite=overwrite)
         if plots:
-            report["plots"] = _plots(out, results, scenario, overwrite=overwrite)
+            report["plots"] = write_plots(out, results, scenario, overwrite=overwrite)
         report["out_dir"] = str(out)
     return report

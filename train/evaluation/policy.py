@@ -1,7 +1,7 @@
 """The policy interface of the evaluation: :class:`EvalPolicy`, an ``act`` function and its action mode.
 
 Its own module so that the policy loaders (:mod:`train.policy_loader`, :mod:`train.rllib_policy`) and
-the evaluation (:mod:`train.evaluate`) share it without importing one another."""
+the evaluation (:mod:`train.evaluation.evaluate`) share it without importing one another."""
 
 from __future__ import annotations
 

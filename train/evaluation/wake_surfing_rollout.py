@@ -115,7 +115,7 @@ def fly(policy, seeds: Sequence[int], *, config=None, keep_series: bool = False,
     from formation_env.sim import Simulation
     from formation_env.tasks.wake_surfing.metrics import WakeSurfingRecorder, episode_metrics
 
-    from .eval_episodes import eval_env_config
+    from .episodes import eval_env_config
 
     seeds = [int(s) for s in seeds]
     if not seeds:

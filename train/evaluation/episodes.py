@@ -1,5 +1,5 @@
 """The evaluation episodes: their env configuration and the batched rollout that measures every
-per-episode metric (the table in :mod:`train.evaluate`)."""
+per-episode metric (the table in :mod:`train.evaluation.evaluate`)."""
 
 from __future__ import annotations
 

@@ -1,0 +1,157 @@
+"""The info quantities of a :class:`~formation_env.sim.Simulation` as arrays with the batch axis
+(:class:`InfoArrays`), the flat info keys of the reward's terms, and the numpy separation the infos report."""
+
+from __future__ import annotations
+
+import math
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from ..aircraft.state import POS
+from .observe import REWARD_TERMS
+
+if TYPE_CHECKING:
+    from .simulation import Simulation
+
+__all__ = ["InfoArrays", "INFO_REWARD_KEYS", "reward_info_key", "separation_each", "finite_values"]
+
+_REWARD_TERM_NAMES = (*REWARD_TERMS, "total")
+
+
+def reward_info_key(term: str) -> str:
+    """The flat info key of a reward term: ``"slot"`` -> ``"reward_slot"`` (``"total"``: the reward itself)."""
+    if term not in _REWARD_TERM_NAMES:
+        raise ValueError(f"unknown reward term {term!r}; terms: {list(_REWARD_TERM_NAMES)}")
+    return f"reward_{term}"
+
+
+#: the flat info keys of the reward's terms, in REWARD_TERMS order, then ``reward_total``
+INFO_REWARD_KEYS = tuple(reward_info_key(t) for t in _REWARD_TERM_NAMES)
+
+
+class InfoArrays:
+    """The info quantities of all formations as arrays (B, V, ...), read from the simulation's state at
+    access time (nothing is computed unless read). Never NaN: a diverged UAV's values read as its last
+    finite ones (the kernel's outputs) or 0."""
+
+    def __init__(self, sim: "Simulation") -> None:
+        self._sim = sim
+
+    @property
+    def time_s(self) -> np.ndarray:
+        """(B,) episode time, s."""
+        return self._sim.time_s
+
+    @property
+    def slot_error_m(self) -> np.ndarray:
+        """(B, V) distance from the slot, m: slot-frame components weighted by the scenario's axes
+        (along-track only with a safe box); the reward's definition, the same at reset and after a step."""
+        return self._sim.output.slot_error_m
+
+    @property
+    def slot_error_ned_m(self) -> np.ndarray:
+        """(B, V, 3) position minus demanded position, m NED."""
+        s = self._sim.state
+        return s.aircraft[..., POS] - s.position_demand
+
+    @property
+    def min_separation_m(self) -> np.ndarray:
+        """(B, V) distance to the nearest other UAV, m (inf alone)."""
+        s, out = self._sim.state, self._sim.output
+        return np.stack([separation_each(s.aircraft[i], out.separation_m[i]) for i in range(s.aircraft.shape[0])])
+
+    @property
+    def induced_wind_ned_mps(self) -> np.ndarray:
+        """(B, V, 3) ELL effective induced wind, m/s NED."""
+        return self._sim.state.induced_wind_ned
+
+    @property
+    def induced_omega_body_rad_s(self) -> np.ndarray:
+        """(B, V, 3) ELL effective rotational wind, rad/s body."""
+        return self._sim.state.induced_omega_body
+
+    @property
+    def fuel_kg(self) -> np.ndarray:
+        """(B, V) fuel on board, kg."""
+        return self._sim.state.aircraft[..., 13]
+
+    @property
+    def gust_ned_mps(self) -> np.ndarray:
+        """(B, V, 3) turbulence at each UAV, m/s NED."""
+        return self._sim.state.gust_ned
+
+    @property
+    def steady_wind_ned_mps(self) -> np.ndarray:
+        """(B, 3) the episode's steady wind, m/s NED."""
+        return self._sim.state.steady_wind
+
+    @property
+    def velocity_demand_ned_mps(self) -> np.ndarray:
+        """(B, V, 3) demanded ground velocities, m/s NED (vehicle 0's: the leader's demanded track)."""
+        return self._sim.state.velocity_demand
+
+    @property
+    def status(self) -> np.ndarray:
+        """(B, V) int64 envelope status bits of the last physics step (0: inside)."""
+        return self._sim.state.status
+
+    @property
+    def collision(self) -> np.ndarray:
+        """(B,) bool: the last decision ended in a collision."""
+        return self._sim.output.collided
+
+    @property
+    def crashed(self) -> np.ndarray:
+        """(B, V) bool: the UAV left the envelope (or diverged) during the last decision."""
+        return self._sim.output.crashed
+
+    @property
+    def command(self) -> np.ndarray:
+        """(B, V, 4) controls of the last physics step: elevator, aileron, rudder rad, throttle 0..1."""
+        return self._sim.state.command
+
+    @property
+    def induced_drag_saving(self) -> np.ndarray:
+        """(B, V) induced-drag saving against the same UAV alone (0 unless the benefit is on)."""
+        return self._sim.output.saving
+
+    @property
+    def box_depth_m(self) -> np.ndarray:
+        """(B, V) distance outside the UAV's safe box, m (0 inside or without a box)."""
+        return self._sim.output.box_depth_m
+
+    @property
+    def reward_terms(self) -> np.ndarray:
+        """(B, V, T) the last decision's reward terms in REWARD_TERMS order (0 after a reset)."""
+        return self._sim.output.reward_terms
+
+
+def separation_each(x: np.ndarray, fallback: np.ndarray | None = None) -> np.ndarray:
+    """(V,) distance from each UAV of one formation (x: (V, 16) states) to its nearest neighbour, m (inf
+    alone); never NaN.
+
+    Pairs with a non-finite position (a UAV that diverged: its episode is ending) are left out;
+    a UAV with no finite pair gets ``fallback`` (the decision step's separation at the last finite
+    positions, ``StepOutput.separation_m``) where that is not NaN, else inf."""
+    with np.errstate(invalid="ignore", over="ignore"):
+        d = np.linalg.norm(x[:, None, POS] - x[None, :, POS], axis=-1)
+    d[~np.isfinite(d)] = np.inf
+    np.fill_diagonal(d, np.inf)
+    sep = d.min(axis=1)
+    if fallback is not None and x.shape[0] > 1:
+        fb = np.asarray(fallback, dtype=float)
+        sep = np.where(~np.isfinite(sep) & ~np.isnan(fb), fb, sep)
+    return sep
+
+
+def finite_values(info: dict) -> None:
+    """Infos never carry NaN or inf from a diverged UAV (its state is non-finite on the step that ends
+    its episode): non-finite numbers become 0.0 and non-finite array entries 0.0, except
+    ``min_separation_m``, which stays inf for a lone UAV (no neighbour)."""
+    for key, value in info.items():
+        if isinstance(value, float):
+            if not math.isfinite(value) and not (key == "min_separation_m" and value == math.inf):
+                info[key] = 0.0
+        elif isinstance(value, np.ndarray) and value.dtype.kind == "f" and not np.all(np.isfinite(value)):
+            info[key] = np.where(np.isfinite(value), value, 0.0)
