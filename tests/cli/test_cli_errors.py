@@ -2,7 +2,7 @@
 
 The table below is walked in-process through :func:`formation_env.cli.main` (argparse's usage errors
 raise ``SystemExit(2)``; the subcommands' own checks return 2). Each case fails before any heavy work.
-``python tests/test_cli_errors.py`` prints the table with the messages (docs/ecosystem.md, "Bad input").
+``python tests/cli/test_cli_errors.py`` prints the table with the messages (docs/ecosystem.md, "Bad input").
 """
 
 from __future__ import annotations
@@ -16,7 +16,7 @@ import pytest
 
 from formation_env.cli import main
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 FILE = "{file}"   # an existing regular file (placeholder, filled per test)
 MISSING = "{missing}"  # a path that does not exist
 BADYAML = "{badyaml}"  # a file that is not valid YAML
