@@ -11,10 +11,14 @@ import numpy as np
 from formation_env.rollout import Recorder
 from formation_env.tasks.wake_surfing.metrics import longest_run
 
-__all__ = ["eval_env_config", "run_episodes", "longest_run", "SPAN_M", "SUCCESS_WINDOW_S"]
+__all__ = ["eval_env_config", "run_episodes", "longest_run", "SPAN_M", "SUCCESS_WINDOW_S", "FAILURE_SLOT_ERROR_M"]
 
 SPAN_M = 2.9
 SUCCESS_WINDOW_S = 5.0
+#: the slot error (m) an episode that ended early is charged for each decision it did not fly: far beyond any
+#: error of an episode flown to the end (the thesis PID's worst RMS in turbulence is ~16 m), and the reward's own
+#: terminal error cap (formation_env.sim.observe), so a crash never scores better than flying on
+FAILURE_SLOT_ERROR_M = 100.0
 DEFAULT_TURBULENCE_SIGMA_MPS = 1.0  # the test set's Dryden level (scenarios without a task preset)
 
 
@@ -129,9 +133,13 @@ def run_episodes(policy, config, seeds: Sequence[int], *, keep_series: bool = Fa
     final_err = np.stack(series["final_err"]) if moving else None
     schedule_start = sc.slots[0].keyframes[1][0] if moving else 0.0
     out = []
+    full = -(-sim.n_steps // sim.substeps)  # decisions in an episode flown to the end
     for i in range(b):
         n = end_step[i]
-        e = err[:n, i]
+        # an episode that ended early (collision, envelope) is scored as a failure for the time it did not
+        # fly: the slot error of every missing decision is FAILURE_SLOT_ERROR_M, never an accurate short run
+        missing = full - n if res.terminated[i] else 0
+        e = np.concatenate([err[:n, i], np.full((missing, a_n), max(FAILURE_SLOT_ERROR_M, float(np.max(err[:n, i]))))])
         m = {
             "seed": seeds[i],
             "duration_s": float(n / config.control_hz),
@@ -150,10 +158,10 @@ def run_episodes(policy, config, seeds: Sequence[int], *, keep_series: bool = Fa
             "leader_fuel_kg": float(fuel0[i, 0] - fuel_end[i, 0]),
         }
         m["fuel_saving_pct"] = float(100.0 * (1.0 - m["fuel_used_kg"] / m["leader_fuel_kg"])) if m["leader_fuel_kg"] > 0 else float("nan")
-        if sim.benefit_enabled:
-            m["induced_drag_saving"] = float(np.mean(saving[:n, i]))
-        if has_box:
-            out_of_box = box[:n, i] > 0.0  # (T, A)
+        if sim.benefit_enabled:  # no saving for the time not flown
+            m["induced_drag_saving"] = float(np.sum(saving[:n, i]) / ((n + missing) * a_n))
+        if has_box:  # the time not flown counts as outside the box
+            out_of_box = np.concatenate([box[:n, i] > 0.0, np.ones((missing, a_n), bool)])  # (T, A)
             m["box_outside_frac"] = float(np.mean(out_of_box))
             m["box_outside_longest_s"] = float(max(longest_run(out_of_box[:, j]) for j in range(a_n)) / config.control_hz)
             m["box_depth_max_m"] = float(np.max(box[:n, i]))

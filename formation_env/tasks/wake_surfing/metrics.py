@@ -15,7 +15,8 @@ time_to_80_s               first time the saving (counted as above), averaged ov
 box_outside_frac           fraction of the decisions outside the safe box
 box_outside_longest_s      longest continuous time outside the box
 min_separation_m           smallest CG distance to the leader at the decision instants
-collision / crashed        the episode ended by a collision / an envelope exit
+collision / crashed        the episode ended by a collision / an envelope exit; an episode that ended early
+                           counts the decisions it did not fly as outside the box with no saving
 lateral_b, vertical_b      the follower's path relative to the leader (track frame, spans), and the
                            reference optimum's, for the figure (with ``keep_series``)
 =========================  =========================================================================
@@ -50,6 +51,7 @@ class WakeSurfingRecorder(Recorder):
         self.rec = {k: [] for k in ("saving", "box", "sep", "rel", "chi", "speed")}
         self.wind = sim.state.steady_wind.copy()  # each episode's steady wind (the reference follows it)
         self.hz = sim.config.control_hz
+        self.full_decisions = -(-sim.n_steps // sim.substeps)  # an episode flown to the end
 
     def after_step(self, sim, out, actions, alive, k) -> None:
         rec, info = self.rec, out.info
@@ -75,14 +77,17 @@ def episode_metrics(rec: WakeSurfingRecorder, result: RolloutResult, keep_series
     out = []
     for i, seed in enumerate(result.seeds):
         n = int(result.decisions[i])
+        # an episode that ended early (collision, envelope) is scored as a failure for the time it did not fly:
+        # no saving there, and outside the box
+        missing = rec.full_decisions - n if result.terminated[i] else 0
         sv = arr["saving"][:n, i]
-        outside = arr["box"][:n, i] > 0.0
+        outside = np.concatenate([arr["box"][:n, i] > 0.0, np.ones(missing, bool)])
         # outside the box a decision earns nothing: there the ELL's saving may be the wake-plane band's
         # artefact (up to ~0.8), which no controller may claim
-        sv_in = np.where(outside, 0.0, sv)
+        sv_in = np.where(outside, 0.0, np.concatenate([sv, np.zeros(missing)]))
         ref = episode_reference(wind[i], arr["chi"][:n, i], arr["speed"][:n, i])
         ref_saving = float(ref["mean_saving"])
-        smooth = np.convolve(sv_in, np.ones(window) / window, mode="full")[:n]
+        smooth = np.convolve(sv_in[:n], np.ones(window) / window, mode="full")[:n]
         smooth[:window - 1] = -np.inf  # a full second first
         reached = np.nonzero(smooth >= 0.8 * np.asarray(ref["saving"]))[0]
         m = {

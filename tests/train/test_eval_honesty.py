@@ -1,0 +1,39 @@
+"""An episode that ends early is scored as a failure in every summary metric, never as a short, accurate run
+(issue 22): the old evaluation gave an immediate crash an RMS slot error of a few mm and 100 % time within 1 m."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from formation_env.rollout import FunctionPolicy, ZeroPolicy
+from train.evaluation.episodes import FAILURE_SLOT_ERROR_M, eval_env_config, run_episodes
+from train.evaluation.summary import summarise
+
+
+def _crash(obs):
+    a = np.zeros((obs.shape[0], 4))
+    a[:, 0] = a[:, 1] = 1.0  # full elevator and aileron: out of the envelope within a second
+    return a
+
+
+def test_a_crash_never_scores_better_than_flying_to_the_end():
+    seeds = [100, 101]
+    crash_cfg = eval_env_config("formation_keeping", "surfaces", turbulence_sigma_mps=0.0, duration_s=20.0)
+    crashed = run_episodes(FunctionPolicy(_crash), crash_cfg, seeds)
+    flown = run_episodes(ZeroPolicy(), eval_env_config("formation_keeping", "setpoints", duration_s=20.0), seeds)
+    for c, f in zip(crashed, flown):
+        assert c["crashed"] and c["duration_s"] < 2.0 and not f["crashed"]
+        assert c["rms_slot_error_m"] > 0.9 * FAILURE_SLOT_ERROR_M > f["rms_slot_error_m"]
+        assert c["max_slot_error_m"] >= FAILURE_SLOT_ERROR_M
+        assert c["time_within_1m_frac"] < 0.1 <= f["time_within_1m_frac"]
+    sc, sf = summarise(crashed, n_boot=50), summarise(flown, n_boot=50)
+    assert sc["rms_slot_error_m"] > sf["rms_slot_error_m"] and sc["time_within_1m_frac"] < sf["time_within_1m_frac"]
+
+
+def test_a_crash_earns_no_saving_for_the_time_it_did_not_fly():
+    from train.evaluation.wake_surfing_rollout import fly
+
+    cfg = eval_env_config("wake_surfing", "surfaces", duration_s=20.0)
+    ep = fly(FunctionPolicy(_crash), [7], config=cfg)[0]
+    assert ep["crashed"] and ep["duration_s"] < 2.0
+    assert ep["box_outside_frac"] > 0.9 and ep["saving"] < 0.02 and ep["saving_ratio"] < 0.05
