@@ -45,6 +45,7 @@ from .params import (ACTION_MODE_CODES, RESIDUAL_SCALE, ActionParams, RewardPara
                      turbulence_params, wake_arrays)
 from .state import StepOutput, init_output, init_state
 from .step import observe, refresh, step
+from .warmup import ensure_warm
 
 __all__ = ["Simulation", "SimOutput", "InfoArrays", "RESET_OPTIONS", "INFO_REWARD_KEYS", "reward_info_key",
            "separation_each"]
@@ -84,6 +85,7 @@ class Simulation:
                  wake_config: WakeConfig | None = None) -> None:
         if not isinstance(config, EnvConfig):
             raise ValueError(f"Simulation: config must be an EnvConfig, got {type(config).__name__}")
+        ensure_warm()  # a cold kernel cache compiles here, with progress on stderr, not silently in the first step
         if isinstance(batch_size, bool) or not isinstance(batch_size, (int, np.integer)) or batch_size < 1:
             raise ValueError(f"batch_size must be an integer >= 1, got {batch_size!r}")
         self.config = config

@@ -1,0 +1,165 @@
+"""Compile the kernels ahead of time, with progress, instead of silently on the first step.
+
+The kernels are numba functions cached on disk (``cache=True``: ``__pycache__`` beside each source file). A
+fresh clone has no cache, so its first simulation step compiles for about 80-90 s on 2 cores. ``make
+install`` runs :func:`warm_up` (``formation-env warmup``), so the first run after it is warm; and when a
+:class:`~formation_env.sim.Simulation` is built while the cache is cold (a stamp beside this module, written
+after a complete warm-up of the current sources, is missing or older than a source file), :func:`ensure_warm`
+says so on stderr and compiles stage by stage, naming each stage and how far it is.
+
+``FORMATION_ENV_NO_WARMUP=1`` turns the automatic warm-up off (the kernels then compile on first use, silently).
+"""
+
+from __future__ import annotations
+
+import os
+import sys
+import threading
+import time
+from pathlib import Path
+
+__all__ = ["warm_up", "ensure_warm", "is_warm", "STAGES"]
+
+_PACKAGE = Path(__file__).resolve().parents[1]
+_STAMP = Path(__file__).resolve().parent / "__pycache__" / "formation_env_warm.stamp"
+_BUSY = False  # a warm-up is running (its own Simulation must not start another)
+_WARM = False  # this process has seen a warm cache (no more stat calls)
+
+
+def _newest_source_mtime() -> float:
+    return max(p.stat().st_mtime for p in _PACKAGE.rglob("*.py") if "__pycache__" not in p.parts)
+
+
+def is_warm() -> bool:
+    """True when a complete warm-up ran after the newest change of any source file (numba's cache is keyed
+    by the source files' modification times, so an edit makes it cold again)."""
+    try:
+        return _STAMP.stat().st_mtime >= _newest_source_mtime()
+    except OSError:
+        return False
+
+
+def _aircraft() -> None:
+    from ..aircraft import trim
+
+    trim(25.0, 1000.0)
+
+
+def _wake() -> None:
+    from ..geometry import aerosonde
+    from ..wake import FormationState, WakeModel, formation_benefit
+
+    b = 2.9
+    model = WakeModel([aerosonde(), aerosonde()])
+    st = FormationState.from_degrees([[0, 0, 0], [-2 * b, b, 0.3 * b]], [[0, 3, 0]] * 2, 25.0, 3.0)
+    model.evaluate(st)
+    formation_benefit(model, st)
+
+
+def _decision_step() -> None:
+    import numpy as np
+
+    from .config import EnvConfig, Randomisation
+    from .simulation import Simulation
+
+    # one configuration exercises every branch type of the step (turbulence, benefit, set-points, a formation)
+    cfg = EnvConfig(scenario="formation_keeping", action_mode="setpoints", compute_benefit=True, duration_s=0.2,
+                    randomisation=Randomisation(turbulence_sigma_mps=1.0))
+    sim = Simulation(cfg, batch_size=2)
+    sim.reset(seeds=[0, 1])
+    sim.step(np.zeros((2, sim.n_agents, 4)))
+    solo = Simulation(EnvConfig(scenario="tracking", duration_s=0.2), batch_size=1)
+    solo.reset(seeds=[0])
+    solo.step(np.zeros((1, solo.n_agents, 4)))
+
+
+def _control() -> None:
+    import numpy as np
+
+    from ..aircraft import trim
+    from ..control import PIDFlightControl
+    from ..control.observation import fcs_observation
+
+    tr = trim(25.0, 1000.0)
+    fcs = PIDFlightControl.from_trim(tr)
+    obs = fcs_observation(tr.state, np.zeros(3), np.zeros(3))
+    obs["position_demand_ned"] = obs["position_ned"]
+    obs["velocity_demand_ned"] = obs["velocity_ned"]
+    fcs.act(obs, fcs.initial_state(1))
+
+
+#: (what compiles, function): in the order the first run needs them
+STAGES = (("Aerosonde aerodynamics, propulsion and trim", _aircraft),
+          ("ELL wake solve and loads", _wake),
+          ("the batched decision step (guidance, PID, wake, RK4, turbulence, reward, observation)", _decision_step),
+          ("the thesis PID as a stand-alone policy", _control))
+
+
+class _Heartbeat:
+    """Prints the elapsed time of a long stage every ``every_s`` seconds (numba compiles one function at a time
+    and says nothing meanwhile)."""
+
+    def __init__(self, stream, k: int, n: int, every_s: float = 15.0) -> None:
+        self.stream, self.k, self.n, self.every_s = stream, k, n, every_s
+        self._stop = threading.Event()
+        self._thread = None
+
+    def __enter__(self):
+        if self.stream is not None:
+            self._t0 = time.perf_counter()
+            self._thread = threading.Thread(target=self._beat, daemon=True)
+            self._thread.start()
+        return self
+
+    def _beat(self) -> None:
+        while not self._stop.wait(self.every_s):
+            print(f"  [{self.k}/{self.n}] still compiling, {time.perf_counter() - self._t0:.0f} s "
+                  "(the decision step takes ~80 s on 2 idle cores)", file=self.stream, flush=True)
+
+    def __exit__(self, *exc) -> None:
+        self._stop.set()
+        if self._thread is not None:
+            self._thread.join()
+
+
+def warm_up(stream=sys.stderr) -> float:
+    """Compile (or load from the cache) every kernel, reporting each stage on ``stream`` (None: silent); writes
+    the stamp :func:`is_warm` reads. Returns the seconds it took."""
+    global _BUSY
+    t0 = time.perf_counter()
+    _BUSY = True
+    try:
+        for k, (what, fn) in enumerate(STAGES, 1):
+            t = time.perf_counter()
+            if stream is not None:
+                print(f"  [{k}/{len(STAGES)}] compiling {what} ...", file=stream, flush=True)
+            with _Heartbeat(stream, k, len(STAGES)):
+                fn()
+            if stream is not None:
+                print(f"  [{k}/{len(STAGES)}] done in {time.perf_counter() - t:.1f} s", file=stream, flush=True)
+    finally:
+        _BUSY = False
+    try:
+        _STAMP.parent.mkdir(parents=True, exist_ok=True)
+        _STAMP.write_text(f"warm-up {time.strftime('%Y-%m-%d %H:%M:%S')}\n")
+    except OSError:  # a read-only install: numba falls back to its own cache directory; nothing to stamp
+        pass
+    return time.perf_counter() - t0
+
+
+def ensure_warm(stream=sys.stderr) -> None:
+    """Warm up (with progress on ``stream``) when the cache is cold; a no-op when warm, during a warm-up, or with
+    ``FORMATION_ENV_NO_WARMUP=1``."""
+    global _WARM
+    if _WARM or _BUSY or os.environ.get("FORMATION_ENV_NO_WARMUP") == "1":
+        return
+    if is_warm():
+        _WARM = True
+        return
+    if stream is not None:
+        print("formation-env: compiling the simulation kernels (first run after an install or a source change; "
+              "cached afterwards; `formation-env warmup` does it ahead of time):", file=stream, flush=True)
+    total = warm_up(stream)
+    _WARM = True
+    if stream is not None:
+        print(f"formation-env: kernels ready in {total:.0f} s", file=stream, flush=True)
