@@ -111,6 +111,19 @@ def make_train_env(cfg: TrainConfig, seed: int):
     return ScaleReward(env)
 
 
+
+def steps_to_run(model, asked: int) -> tuple[int, str]:
+    """How many environment steps ``model.learn(asked)`` will take, and why it differs: SB3 stops only between
+    whole rollouts (on-policy: ``n_steps`` per env index) or whole vector steps (one per env index)."""
+    n_envs = int(model.n_envs)
+    if hasattr(model, "n_steps"):  # PPO / A2C collect whole rollouts
+        chunk = int(model.n_steps) * n_envs
+        why = f"{type(model).__name__} collects whole rollouts of {model.n_steps} steps x {n_envs} env indices = {chunk}"
+    else:
+        chunk = n_envs
+        why = f"the {n_envs} env indices step together"
+    return -(-asked // chunk) * chunk, why
+
 def train(*, scenario: str | None = None, algo: str | None = None, action_mode: str = "residual", seed: int = 0,
           steps: int | None = None, config_file: str | Path | None = None, out_dir: str | Path | None = None,
           overwrite: bool = False, resume: bool = False, progress_bar: bool | None = None,
@@ -203,9 +216,13 @@ def train(*, scenario: str | None = None, algo: str | None = None, action_mode: 
 
     formats = ["csv"] + (["tensorboard"] if tensorboard_available() else [])
     model.set_logger(configure(str(log_dir), formats))
+    asked = cfg.n_timesteps - state["start_steps"]
+    runs, why = steps_to_run(model, asked)
+    state["total"] = state["start_steps"] + runs  # what the progress log counts towards
     callbacks, _ = build_callbacks(cfg, run_dir, state, log, progress_bar)
-    log(f"training {cfg.algo} on {cfg.scenario} ({cfg.action_mode} actions), seed {cfg.seed}, {cfg.n_timesteps} steps, "
-        f"{cfg.n_formations} formations -> {run_dir}")
+    log(f"training {cfg.algo} on {cfg.scenario} ({cfg.action_mode} actions), seed {cfg.seed}, {cfg.n_formations} "
+        f"formations -> {run_dir}")
+    log(f"steps: {asked} asked for, {runs} will run" + ("" if runs == asked else f" ({why})"))
     t0 = time.perf_counter()
     model.learn(total_timesteps=cfg.n_timesteps - state["start_steps"], callback=callbacks,
                 reset_num_timesteps=ck is None, progress_bar=progress_bar)
