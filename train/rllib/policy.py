@@ -7,7 +7,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..eval_policy import EvalPolicy
+from ..evaluation.policy import EvalPolicy
 from .checkpoints import CHECKPOINT_META, latest_rllib_checkpoint
 from .cluster import require_rllib
 

@@ -24,7 +24,7 @@ def build_callbacks(cfg: TrainConfig, run_dir: Path, state: dict, log: Callable[
     """The callbacks of a run and its validation callback (None when ``eval_freq`` is 0)."""
     from stable_baselines3.common.callbacks import BaseCallback
 
-    from ..eval_episodes import eval_env_config, run_episodes
+    from ..evaluation.episodes import eval_env_config, run_episodes
     from ..evaluation.summary import selection_score, summarise
 
     class Curve(BaseCallback):
