@@ -8,12 +8,14 @@ import math
 import os
 from pathlib import Path
 
-__all__ = ["MAX_DURATION_S", "MAX_GIF_FRAMES", "MAX_EPISODES", "OneLineArgumentParser", "duration",
-           "positive_int", "nonneg_int", "bounded_int", "finite_float", "check_out_path"]
+__all__ = ["MAX_DURATION_S", "MAX_GIF_FRAMES", "MAX_EPISODES", "MAX_TRAIN_STEPS", "OneLineArgumentParser", "duration",
+           "positive_int", "nonneg_int", "bounded_int", "finite_float", "check_out_path", "check_min_duration",
+           "trained_scenario", "check_policy_scenario"]
 
 MAX_DURATION_S = 3600.0  # longest episode replay/run/evaluate fly (one hour of flight)
 MAX_GIF_FRAMES = 2000    # most frames of a replay GIF (formation_env.replay.animation.MAX_FRAMES)
 MAX_EPISODES = 10_000    # most evaluation episodes per policy (they run as one batch)
+MAX_TRAIN_STEPS = 10 ** 9  # most environment steps of one training run (--steps)
 
 
 class OneLineArgumentParser(argparse.ArgumentParser):
@@ -93,3 +95,62 @@ def check_out_path(path, option: str = "--out") -> None:
         raise ValueError(f"{option} {text!r}: {str(parent)!r} is a file, not a directory")
     if not os.access(parent, os.W_OK | os.X_OK):
         raise ValueError(f"{option} {text!r}: cannot create it, {str(parent)!r} is not writable")
+
+
+def check_min_duration(duration_s: float | None, scenario) -> None:
+    """A --duration shorter than one physics step of ``scenario`` (a Scenario) is a ValueError."""
+    if duration_s is not None and duration_s < scenario.dt:
+        raise ValueError(f"--duration {duration_s:g}: shorter than one step of {scenario.name!r} ({scenario.dt:g} s); "
+                         f"give a number of seconds in [{scenario.dt:g}, {MAX_DURATION_S:g}]")
+
+
+def trained_scenario(path) -> str | None:
+    """The scenario a policy was trained on: a zip's sidecar JSON / config.yaml, or an RLlib checkpoint's
+    metadata (the checkpoint directory's, or the latest checkpoint's of a run directory); None if unknown."""
+    import json
+
+    path = Path(path)
+    if path.is_file():
+        from train.evaluation.policy_loader import policy_metadata
+
+        try:
+            return policy_metadata(path).get("scenario")
+        except (OSError, ValueError, AttributeError):
+            return None
+    if not path.is_dir():
+        return None
+    from train.rllib.checkpoints import CHECKPOINT_META, latest_rllib_checkpoint
+
+    meta = path / CHECKPOINT_META
+    if not meta.is_file():
+        latest = latest_rllib_checkpoint(path)
+        if latest is None:
+            return None
+        meta = latest[0] / CHECKPOINT_META
+    try:
+        return json.loads(meta.read_text()).get("scenario")
+    except (OSError, ValueError, AttributeError):
+        return None
+
+
+def check_policy_scenario(spec: str, scenario: str, *, allow: bool) -> None:
+    """A learned policy flies only the scenario it was trained for: another one is a ValueError naming
+    both, unless ``allow`` (--allow-scenario-mismatch) and the two observation sizes agree. Policies whose
+    metadata names no scenario, and the baselines, pass."""
+    if spec in ("pid", "pid_formation"):
+        return
+    trained = trained_scenario(spec)
+    if trained is None or trained == scenario:
+        return
+    from ..scenarios import get_scenario, scenario_names
+    from ..sim.observe import observation_size
+
+    if not allow:
+        raise ValueError(f"--policy {spec!r} was trained for {trained!r}, not --scenario {scenario!r} (use "
+                         f"--scenario {trained}, or pass --allow-scenario-mismatch)")
+    size = observation_size(get_scenario(scenario).n_vehicles)
+    if trained in scenario_names():
+        own = observation_size(get_scenario(trained).n_vehicles)
+        if own != size:
+            raise ValueError(f"--policy {spec!r} was trained for {trained!r} (observations of {own}), --scenario "
+                             f"{scenario!r} observes {size}: --allow-scenario-mismatch needs equal sizes")

@@ -1,10 +1,13 @@
-"""``formation-env bench``: ELL (and, when present, dynamics) speed figures."""
+"""``formation-env bench``: ELL (and, when present, dynamics) speed figures. Progress (which benchmark,
+which case, k/N) goes to stderr; the figures (and ``--json``) to stdout."""
 
 from __future__ import annotations
 
 import json
 import os
 import platform
+import sys
+import time
 
 from ._args import nonneg_int, positive_int
 from ._optional import import_available
@@ -40,11 +43,21 @@ def run(args) -> int:
     if args.baseline is not None and not os.path.isdir(os.path.join(args.baseline, "formation_env")):
         raise ValueError(f"--baseline {args.baseline!r}: not a checkout (no formation_env/ inside)")
     results = {"machine": {"cpus": os.cpu_count(), "python": platform.python_version(), "platform": platform.platform()}}
-    for name, module in import_available(BENCH_MODULES).items():
+    modules = import_available(BENCH_MODULES)
+    t0 = time.perf_counter()
+
+    def log(line: str) -> None:
+        print(f"bench [{time.perf_counter() - t0:5.0f} s] {line}", file=sys.stderr, flush=True)
+
+    for k, (name, module) in enumerate(modules.items(), 1):
+        key = name.split(".")[1]
+        log(f"{k}/{len(modules)} {key} ({name}) ...")
         if name == "formation_env.envs.bench":
-            results["envs"] = module.run_benchmarks(quick=args.quick, baseline=args.baseline, busy=args.busy)
+            results["envs"] = module.run_benchmarks(quick=args.quick, baseline=args.baseline, busy=args.busy,
+                                                    log=lambda line: log(f"{k}/{len(modules)} {line}"))
         else:
-            results[name.split(".")[1]] = module.run_benchmarks(quick=args.quick)
+            results[key] = module.run_benchmarks(quick=args.quick)
+    log("done")
     if args.json:
         print(json.dumps(results, indent=2))
     else:

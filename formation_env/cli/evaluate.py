@@ -7,7 +7,8 @@ from __future__ import annotations
 
 import time
 
-from ._args import MAX_DURATION_S, MAX_EPISODES, bounded_int, duration
+from ._args import (MAX_DURATION_S, MAX_EPISODES, bounded_int, check_min_duration, check_policy_scenario,
+                    duration)
 
 
 def _nonneg_float(text: str) -> float:
@@ -51,7 +52,10 @@ def register(sub) -> None:
     p.add_argument("--action-mode", default=None, choices=ACTION_MODES,
                    help="action mode of the zips when no sidecar JSON / config.yaml says it")
     p.add_argument("--duration", type=duration, default=None,
-                   help=f"override the episode length, s (at most {MAX_DURATION_S:g})")
+                   help=f"override the episode length, s (at least one physics step, at most {MAX_DURATION_S:g})")
+    p.add_argument("--allow-scenario-mismatch", action="store_true",
+                   help="evaluate a policy on a scenario other than the one it was trained for (its metadata's); "
+                        "the observation sizes must still agree")
     p.add_argument("--out", default=None, help="output directory (default runs/eval-<scenario>-<timestamp>)")
     p.add_argument("--overwrite", action="store_true", help="allow an existing non-empty output directory")
     p.add_argument("--no-plots", action="store_true", help="write only results.json and results.md")
@@ -75,7 +79,10 @@ def run(args) -> int:
         args.episodes = TEST_EPISODES
     from ..scenarios import get_scenario
 
-    get_scenario(args.scenario)  # unknown names fail before a policy loads
+    sc = get_scenario(args.scenario)  # unknown names fail before a policy loads
+    check_min_duration(args.duration, sc)
+    for spec in args.policy:
+        check_policy_scenario(spec, sc.name, allow=args.allow_scenario_mismatch)
     out = args.out or f"runs/eval-{args.scenario}-{time.strftime('%Y%m%d-%H%M%S')}"
     rep = evaluate(args.policy, scenario=args.scenario, episodes=args.episodes, seeds=args.seeds,
                    turbulence_sigma_mps=args.turbulence, wake=not args.no_wake, compute_benefit=args.benefit,

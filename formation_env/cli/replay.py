@@ -16,7 +16,8 @@ import json
 import sys
 import time
 
-from ._args import MAX_DURATION_S, MAX_GIF_FRAMES, bounded_int, duration, nonneg_int, positive_int
+from ._args import (MAX_DURATION_S, MAX_GIF_FRAMES, bounded_int, check_min_duration, check_policy_scenario, duration,
+                    nonneg_int, positive_int, trained_scenario)
 
 DEFAULT_SEED = 20_000_000_000  # train.config.TEST_SEED_BASE: the first held-out evaluation episode
 
@@ -42,12 +43,14 @@ def register(sub) -> None:
                    help="action mode of a zip without sidecar JSON / config.yaml")
     p.add_argument("--seed", type=nonneg_int, default=None,
                    help=f"episode seed of a learned / pid_formation replay (default {DEFAULT_SEED}, the first "
-                        "held-out evaluation episode); the pid replay draws no random numbers")
+                        "held-out evaluation episode); refused with --policy pid, whose replay draws no random numbers")
     p.add_argument("--turbulence", type=_nonneg_sigma, default=None,
                    help="Dryden sigma, m/s, of a learned / pid_formation replay (default 1, as evaluate)")
     p.add_argument("--no-wake", action="store_true", help="fly without the ELL wake interaction")
+    p.add_argument("--allow-scenario-mismatch", action="store_true",
+                   help="fly a policy on a scenario other than the one it was trained for (equal observation sizes)")
     p.add_argument("--duration", type=duration, default=None,
-                   help=f"override the scenario's duration, s (at most {MAX_DURATION_S:g})")
+                   help=f"override the scenario's duration, s (at least one physics step, at most {MAX_DURATION_S:g})")
     p.add_argument("--out", default=None, help="output directory (default results/replay-<scenario>-<timestamp>)")
     p.add_argument("--overwrite", action="store_true", help="allow writing into an existing non-empty directory")
     p.add_argument("--gif", action="store_true", help="also write an animated GIF (3D view with the wake legs)")
@@ -125,48 +128,28 @@ def _fly_policy(policy, scenario: str, *, seed: int, wake: bool, turbulence: flo
     return log, status
 
 
-def _trained_scenario(path, zip_metadata) -> str | None:
-    """The scenario a policy was trained on: a zip's sidecar JSON / config.yaml, or an RLlib checkpoint's
-    metadata (the checkpoint directory's, or the latest checkpoint's of a run directory)."""
-    if path.is_file():
-        return zip_metadata(path).get("scenario")
-    if not path.is_dir():
-        return None
-    from train.rllib.checkpoints import CHECKPOINT_META, latest_rllib_checkpoint
-
-    meta = path / CHECKPOINT_META
-    if not meta.is_file():
-        latest = latest_rllib_checkpoint(path)
-        if latest is None:
-            return None
-        meta = latest[0] / CHECKPOINT_META
-    try:
-        return json.loads(meta.read_text()).get("scenario")
-    except (OSError, ValueError, AttributeError):
-        return None
-
-
 def run(args) -> int:
     from ..scenarios import get_scenario
 
     policy_spec = args.policy
     learned = policy_spec != "pid"
-    if not learned and (args.turbulence is not None or args.action_mode is not None):
-        given = [o for o, v in (("--turbulence", args.turbulence), ("--action-mode", args.action_mode))
-                 if v is not None]
-        raise ValueError(f"{', '.join(given)}: only with a learned policy or pid_formation (the pid replay is the "
-                         "scenario's deterministic run)")
+    if not learned:
+        given = [f"{o} {v}" for o, v in (("--seed", args.seed), ("--turbulence", args.turbulence),
+                                         ("--action-mode", args.action_mode)) if v is not None]
+        if given:
+            raise ValueError(f"{', '.join(given)}: only with a learned policy or pid_formation (the pid replay is the "
+                             "scenario's deterministic run and draws no random numbers)")
+        if args.allow_scenario_mismatch:
+            raise ValueError("--allow-scenario-mismatch: only with a learned policy")
     pol = None
     if learned:
         try:
-            from train.evaluation.policy_loader import policy_metadata, load_policy
+            from train.evaluation.policy_loader import load_policy
         except ModuleNotFoundError as exc:
             raise ValueError(f"--policy {policy_spec!r} needs the RL extra ({exc}); pip install -e '.[rl]'") from None
-        from pathlib import Path
-
         scenario = args.scenario
         if scenario is None and policy_spec != "pid_formation":
-            scenario = _trained_scenario(Path(policy_spec), policy_metadata)
+            scenario = trained_scenario(policy_spec)
         if scenario is None:
             raise ValueError(f"--scenario is required with --policy {policy_spec!r}" +
                              ("" if policy_spec == "pid_formation" else " (no scenario in the policy's metadata)"))
@@ -174,13 +157,13 @@ def run(args) -> int:
         if sc.n_vehicles < 2:
             raise ValueError(f"--scenario {sc.name!r} has one UAV; --policy {policy_spec!r} flies followers "
                              "(use --policy pid)")
+        check_policy_scenario(policy_spec, sc.name, allow=args.allow_scenario_mismatch)
         pol = load_policy(policy_spec, action_mode=args.action_mode)  # unknown files fail before any output
     else:
         if args.scenario is None:
             raise ValueError("--scenario is required with --policy pid")
         sc = get_scenario(args.scenario)
-    if args.duration is not None and args.duration < sc.dt:
-        raise ValueError(f"--duration {args.duration:g}: shorter than one step of {sc.name!r} ({sc.dt:g} s)")
+    check_min_duration(args.duration, sc)
 
     from ..io import prepare_output_dir
     from ..plotting import save_figure

@@ -9,6 +9,8 @@ from __future__ import annotations
 import shlex
 import sys
 
+from ._args import MAX_TRAIN_STEPS, bounded_int
+
 
 def _positive_int(text: str) -> int:
     import argparse
@@ -49,9 +51,9 @@ def register(sub) -> None:
                    help="RL algorithm (sb3: required unless --resume; rllib: ppo, the default)")
     p.add_argument("--action-mode", default=None, choices=ACTION_MODES,
                    help="surfaces (direct), residual (added to the PID, default) or setpoints (PID tracker offsets)")
-    p.add_argument("--steps", type=_positive_int, default=None,
-                   help="total environment steps (sb3: agent decisions; rllib: formation decisions); default: "
-                        "n_timesteps of the hyperparameters")
+    p.add_argument("--steps", type=bounded_int(1, MAX_TRAIN_STEPS), default=None,
+                   help=f"total environment steps, 1..{MAX_TRAIN_STEPS:,} (sb3: agent decisions; rllib: formation "
+                        "decisions); default: n_timesteps of the hyperparameters")
     p.add_argument("--seed", type=_nonneg_int, default=None, help="seed of the env, the model and torch (default 0)")
     p.add_argument("--config", default=None,
                    help="YAML hyperparameter file merged over train/hyperparams/<algo>.yml (rllib: rllib_ppo.yml)")

@@ -38,8 +38,10 @@ def _busy() -> subprocess.Popen:
     return subprocess.Popen([sys.executable, "-c", "while True: pass"])
 
 
-def _run(code_root: str | None, cases: list[dict], threads: int, busy: bool, budget_s: float, repeats: int) -> list[dict]:
-    """Run ``cases`` in a fresh interpreter importing formation_env from ``code_root`` (None: this one)."""
+def _run(code_root: str | None, cases: list[dict], threads: int, busy: bool, budget_s: float, repeats: int,
+         on_case=None) -> list[dict]:
+    """Run ``cases`` in a fresh interpreter importing formation_env from ``code_root`` (None: this one);
+    ``on_case(k)`` is called as the subprocess starts case k (its progress lines on stderr)."""
     env = dict(os.environ, NUMBA_NUM_THREADS=str(threads), OMP_NUM_THREADS=str(threads))
     src = Path(__file__).with_name("bench_cases.py")
     with tempfile.TemporaryDirectory() as tmp:
@@ -48,17 +50,29 @@ def _run(code_root: str | None, cases: list[dict], threads: int, busy: bool, bud
         root = code_root if code_root is not None else str(Path(__file__).resolve().parents[2])
         env["PYTHONPATH"] = root + os.pathsep + env.get("PYTHONPATH", "")
         spin = _busy() if busy else None
+        errors: list[str] = []
         try:
-            out = subprocess.run([sys.executable, str(script), json.dumps(
-                {"cases": cases, "budget_s": budget_s, "repeats": repeats})], env=env, cwd=tmp, capture_output=True,
-                text=True, check=False)
+            with open(Path(tmp) / "stdout.txt", "w+", encoding="utf-8") as stdout:
+                proc = subprocess.Popen([sys.executable, str(script), json.dumps(
+                    {"cases": cases, "budget_s": budget_s, "repeats": repeats})], env=env, cwd=tmp, stdout=stdout,
+                    stderr=subprocess.PIPE, text=True)
+                for line in proc.stderr:  # progress lines as they come; the rest is kept for an error
+                    parts = line.split()
+                    if len(parts) == 3 and parts[0] == "bench-case" and parts[1].isdigit():
+                        if on_case is not None:
+                            on_case(int(parts[1]))
+                    else:
+                        errors.append(line)
+                returncode = proc.wait()
+                stdout.seek(0)
+                text = stdout.read()
         finally:
             if spin is not None:
                 spin.kill()
                 spin.wait()
-    if out.returncode != 0:
-        raise RuntimeError(f"bench subprocess failed ({code_root or 'this checkout'}):\n{out.stderr[-2000:]}")
-    return json.loads(out.stdout.strip().splitlines()[-1])
+    if returncode != 0:
+        raise RuntimeError(f"bench subprocess failed ({code_root or 'this checkout'}):\n{''.join(errors)[-2000:]}")
+    return json.loads(text.strip().splitlines()[-1])
 
 
 def _key(case: dict) -> str:
@@ -68,8 +82,9 @@ def _key(case: dict) -> str:
         " benefit" if case.get("benefit") else "")
 
 
-def run_benchmarks(quick: bool = False, baseline: str | None = None, busy: bool = True) -> dict:
-    """Every configuration: {case: {"new": ..., "old": ..., "ratio": new/old}} for (threads, busy)."""
+def run_benchmarks(quick: bool = False, baseline: str | None = None, busy: bool = True, log=None) -> dict:
+    """Every configuration: {case: {"new": ..., "old": ..., "ratio": new/old}} for (threads, busy).
+    ``log(line)``, when given, gets one progress line per measured case ("envs k/N: <config> <case>")."""
     sizes = (1, 16, 256) if quick else BATCH_SIZES
     budget, repeats = (0.2, 2) if quick else (0.6, 3)
     cases = SINGLE_CASES + _vector_cases(sizes) + [{"kind": "vector", "formations": 256, "mode": "setpoints",
@@ -77,11 +92,24 @@ def run_benchmarks(quick: bool = False, baseline: str | None = None, busy: bool 
     configs = [(2, False), (1, False)] + ([(2, True), (1, True)] if busy else [])
     out: dict = {"case": "formation_keeping, 2 Aerosondes, ELL wake every 50 Hz physics step, 10 Hz decisions",
                  "baseline": baseline, "peers_reported": PEERS, "configurations": {}}
+    total = len(configs) * len(cases) * (2 if baseline else 1)
+    done = [0]
+
+    def progress(name: str, which: str):
+        if log is None:
+            return None
+
+        def on_case(k: int) -> None:
+            done[0] += 1
+            log(f"envs {done[0]}/{total}: {name}{which} {_key(cases[k])}")
+
+        return on_case
+
     for threads, is_busy in configs:
         name = f"threads={threads}" + (" busy" if is_busy else "")
-        new = _run(None, cases, threads, is_busy, budget, repeats)
+        new = _run(None, cases, threads, is_busy, budget, repeats, progress(name, " (this checkout)" if baseline else ""))
         # the older code may lack newer cases (the benefit case is measured on both when possible)
-        old = _run(baseline, cases, threads, is_busy, budget, repeats) if baseline else None
+        old = _run(baseline, cases, threads, is_busy, budget, repeats, progress(name, " (baseline)")) if baseline else None
         rows = {}
         for i, case in enumerate(cases):
             metric = "physics_steps_per_s" if case["kind"] == "single" else "uav_physics_steps_per_s"

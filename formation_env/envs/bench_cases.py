@@ -83,10 +83,23 @@ def run_case(case: dict, budget_s: float = 0.5, repeats: int = 3) -> dict:
     raise ValueError(f"unknown bench case kind {case['kind']!r}")
 
 
-def run_cases(cases: list[dict], budget_s: float = 0.5, repeats: int = 3) -> list[dict]:
-    return [run_case(c, budget_s, repeats) for c in cases]
+PROGRESS = "bench-case"  # stderr line "bench-case K N" before case K (0-based) of N: formation_env.envs.bench
+
+
+def run_cases(cases: list[dict], budget_s: float = 0.5, repeats: int = 3, progress=None) -> list[dict]:
+    """Every case in order; ``progress(k, n)`` is called before case k (outside any timing)."""
+    out = []
+    for k, c in enumerate(cases):
+        if progress is not None:
+            progress(k, len(cases))
+        out.append(run_case(c, budget_s, repeats))
+    return out
+
+
+def _progress_line(k: int, n: int) -> None:
+    print(f"{PROGRESS} {k} {n}", file=sys.stderr, flush=True)
 
 
 if __name__ == "__main__":  # pragma: no cover - driven by formation_env.envs.bench in a subprocess
     spec = json.loads(sys.argv[1])
-    print(json.dumps(run_cases(spec["cases"], spec.get("budget_s", 0.5), spec.get("repeats", 3))))
+    print(json.dumps(run_cases(spec["cases"], spec.get("budget_s", 0.5), spec.get("repeats", 3), _progress_line)))

@@ -21,6 +21,7 @@ FILE = "{file}"   # an existing regular file (placeholder, filled per test)
 MISSING = "{missing}"  # a path that does not exist
 BADYAML = "{badyaml}"  # a file that is not valid YAML
 ZIP = str(ROOT / "train" / "policies" / "close_formation_ppo_setpoints_seed0.zip")
+WS_ZIP = str(ROOT / "train" / "policies" / "wake_surfing_ppo_setpoints_seed0.zip")  # trained for wake_surfing
 
 # (argv, text the one-line message must contain)
 CASES: list[tuple[list[str], str]] = [
@@ -59,6 +60,10 @@ CASES: list[tuple[list[str], str]] = [
     (["replay", "--policy", ZIP, "--turbulence", "nan"], "'nan'"),
     (["replay", "--policy", ZIP, "--action-mode", "thrust"], "'thrust'"),
     (["replay", "--scenario", "tracking", "--turbulence", "1"], "--turbulence"),
+    (["replay", "--scenario", "tracking", "--seed", "5"], "--seed 5"),  # the pid replay draws no random numbers
+    (["replay", "--scenario", "tracking", "--allow-scenario-mismatch"], "--allow-scenario-mismatch"),
+    (["replay", "--policy", WS_ZIP, "--scenario", "formation_keeping"], "'wake_surfing'"),
+    (["replay", "--policy", WS_ZIP, "--scenario", "vee", "--allow-scenario-mismatch"], "71"),
     (["replay", "--scenario", "tracking", "--out", FILE], "afile"),
     (["replay", "--scenario", "tracking", "--out", FILE + "/sub/dir"], "afile"),
     # evaluate
@@ -75,6 +80,10 @@ CASES: list[tuple[list[str], str]] = [
     (["evaluate", "--policy", "pid", "--scenario", "formation_keeping", "--turbulence", "inf"], "'inf'"),
     (["evaluate", "--policy", "pid", "--scenario", "formation_keeping", "--duration", "1e9"], "'1e9'"),
     (["evaluate", "--policy", "pid", "--scenario", "formation_keeping", "--duration", "0"], "'0'"),
+    (["evaluate", "--policy", "pid", "--scenario", "formation_keeping", "--duration", "0.001"], "0.001"),
+    (["evaluate", "--policy", WS_ZIP, "--scenario", "formation_keeping"], "'wake_surfing'"),
+    (["evaluate", "--policy", "pid", "--policy", WS_ZIP, "--scenario", "close_formation"], "'wake_surfing'"),
+    (["evaluate", "--policy", WS_ZIP, "--scenario", "vee", "--allow-scenario-mismatch"], "71"),
     (["evaluate", "--policy", "pid", "--scenario", "formation_keeping", "--turbulence-field", "gusty"], "'gusty'"),
     (["evaluate", "--policy", "pid", "--scenario", "airshow"], "airshow"),
     (["evaluate", "--policy", MISSING + ".zip", "--scenario", "formation_keeping"], "missing.zip"),
@@ -86,6 +95,8 @@ CASES: list[tuple[list[str], str]] = [
     (["train", "--scenario", "formation_keeping", "--algo", "ppo", "--steps", "0"], "'0'"),
     (["train", "--scenario", "formation_keeping", "--algo", "ppo", "--steps", "-5"], "'-5'"),
     (["train", "--scenario", "formation_keeping", "--algo", "ppo", "--steps", "lots"], "'lots'"),
+    (["train", "--scenario", "formation_keeping", "--algo", "ppo", "--steps", "9" * 23], "'" + "9" * 23 + "'"),
+    (["train", "--scenario", "formation_keeping", "--algo", "ppo", "--steps", "1000000001"], "[1, 1000000000]"),
     (["train", "--scenario", "formation_keeping", "--algo", "ppo", "--seed", "-1"], "'-1'"),
     (["train", "--scenario", "formation_keeping", "--algo", "ppo", "--config", MISSING + ".yml"], "missing.yml"),
     (["train", "--scenario", "formation_keeping", "--algo", "ppo", "--out", FILE + "/run"], "afile"),

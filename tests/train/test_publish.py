@@ -27,3 +27,82 @@ def test_attach_evaluation_writes_a_slim_record_and_updates_the_metadata(tmp_pat
     assert meta["evaluation"]["comparisons"]["pid"]["rms_slot_error_m"]["mean_reduction"] == 7.5
     with pytest.raises(FileExistsError):  # the record is never silently overwritten
         publish.attach_evaluation(["p_seed0"], src, tmp_path / "record.json")
+
+
+def _fake_evaluate(calls):
+    """train.evaluation.evaluate.evaluate without flying: a report of the right shape (and its files)."""
+    from pathlib import Path
+
+    def evaluate(policies, *, scenario, episodes, out_dir=None, overwrite=False, seeds=None, plots=True, log=None):
+        calls.append(scenario)
+        names = [Path(p).stem if p.endswith(".zip") else p for p in policies]
+        ep = {"seed": 20000000000, "rms_slot_error_m": 1.0, "series": {"slot_error_m": [1.0]}}
+        rep = {"scenario": scenario, "seeds": [20000000000], "wake": True, "turbulence_sigma_mps": 1.0,
+               "policies": {n: {"summary": {"rms_slot_error_m": 1.0 + i}, "episodes": [ep]} for i, n in enumerate(names)},
+               "comparisons": {}, "table_markdown": "| table |", "comparison_markdown": "", "groups_markdown": ""}
+        if out_dir is not None:
+            out = Path(out_dir)
+            out.mkdir(parents=True, exist_ok=overwrite)
+            (out / "results.json").write_text(json.dumps(rep))
+            (out / "results.md").write_text("# results\n")
+            (out / "slot_error.png").write_bytes(b"\x89PNG fake")
+        return rep
+
+    return evaluate
+
+
+def _tracked_state():
+    from train.publish.report_committed import FIGURES
+
+    files = sorted(publish.POLICIES.glob("*.json")) + sorted(FIGURES.glob("*.png"))
+    return {str(f): f.stat().st_mtime_ns for f in files}
+
+
+def test_report_committed_out_writes_only_under_out(tmp_path, monkeypatch, capsys):
+    from train.publish import report_committed as rc
+
+    calls = []
+    monkeypatch.setattr(rc, "evaluate", _fake_evaluate(calls))
+    before = _tracked_state()
+    out = tmp_path / "eval"
+    assert rc.main(["--out", str(out), "--episodes", "2", "--tasks", "formation_keeping"]) == 0
+    assert calls == ["formation_keeping", "formation_keeping"]  # the test set, then the validation baselines
+    assert _tracked_state() == before  # nothing tracked is touched
+    for f in ("formation_keeping/results.json", "policies/formation_keeping_ppo_setpoints_evaluation.json",
+              "policies/formation_keeping_ppo_setpoints_seed2.json", "figures/eval_formation_keeping_slot_error.png",
+              "figures/training_curves.png", "validation_baselines.json"):
+        assert (out / f).is_file(), f
+    meta = json.loads((out / "policies" / "formation_keeping_ppo_setpoints_seed0.json").read_text())
+    assert meta["env"]["scenario"] == "formation_keeping" and meta["evaluation"]["summary"]["rms_slot_error_m"] == 1.0
+    # Again into the same directory: refused up front, before any evaluation, in one line.
+    calls.clear()
+    capsys.readouterr()
+    assert rc.main(["--out", str(out), "--tasks", "formation_keeping"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert calls == [] and len(err) == 1 and "not empty" in err[0]
+
+
+def test_report_committed_checks_every_output_before_evaluating(tmp_path, monkeypatch, capsys):
+    import shutil
+
+    from train.publish import report_committed as rc
+
+    calls = []
+    monkeypatch.setattr(rc, "evaluate", _fake_evaluate(calls))
+    pol, fig = tmp_path / "policies", tmp_path / "figures"
+    shutil.copytree(publish.POLICIES, pol, ignore=shutil.ignore_patterns("*.zip", "*.csv"))
+    for z in publish.POLICIES.glob("formation_keeping_*.zip"):
+        (pol / z.name).write_bytes(b"zip")
+    fig.write_text("a file where the figures directory should be\n")
+    monkeypatch.setattr(publish, "POLICIES", pol)
+    monkeypatch.setattr(rc, "FIGURES", fig)
+    argv = ["--out", str(tmp_path / "eval"), "--overwrite", "--tasks", "formation_keeping"]
+    assert rc.main(argv) == 2 and calls == []  # a tracked output that cannot be written: nothing flies
+    assert "figures" in capsys.readouterr().err
+    fig.unlink()
+    fig.mkdir()
+    old = (pol / "formation_keeping_ppo_setpoints_evaluation.json").read_text()
+    assert rc.main(argv) == 0 and len(calls) == 2  # --overwrite: the tracked records are replaced
+    assert (pol / "formation_keeping_ppo_setpoints_evaluation.json").read_text() != old
+    assert (fig / "eval_formation_keeping_slot_error.png").read_bytes() == b"\x89PNG fake"
+    assert not (tmp_path / "eval" / "policies").exists()

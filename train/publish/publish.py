@@ -62,15 +62,17 @@ def slim_evaluation(report: dict) -> dict:
     return out
 
 
-def attach_evaluation(names: list[str], eval_json: str | Path, record: str | Path) -> None:
-    """Write the slim held-out evaluation to ``record`` (a new file) and put each policy's summary and
-    its paired comparisons into ``NAME.json`` (the metadata is updated in place, atomically)."""
+def attach_evaluation(names: list[str], eval_json: str | Path, record: str | Path, *, overwrite: bool = False,
+                      meta_dir: str | Path | None = None) -> None:
+    """Write the slim held-out evaluation to ``record`` (a new file unless ``overwrite``) and put each
+    policy's summary and its paired comparisons into ``NAME.json``: read from ``train/policies/`` and
+    written atomically to ``meta_dir`` (default: in place)."""
     rep = json.loads(Path(eval_json).read_text())
     slim = slim_evaluation(rep)
-    atomic_write_json(record, slim)
+    atomic_write_json(record, slim, overwrite=overwrite)
     for name in names:
-        meta_path = POLICIES / f"{name}.json"
-        meta = json.loads(meta_path.read_text())
+        meta = json.loads((POLICIES / f"{name}.json").read_text())
+        meta_path = (POLICIES if meta_dir is None else Path(meta_dir)) / f"{name}.json"
         meta["evaluation"] = {"record": Path(record).name, "seeds": [rep["seeds"][0], rep["seeds"][-1]],
                               "episodes": len(rep["seeds"]), "turbulence_sigma_mps": rep["turbulence_sigma_mps"],
                               "wake": rep["wake"], "summary": rep["policies"][name]["summary"],

@@ -1,60 +1,151 @@
 """Evaluate the committed policies (3 training seeds per task) beside the thesis PID and ``pid_formation``
 on 100 held-out test episodes, attach the results to their metadata and draw the README figures.
 
-    python -m train.publish.report_committed [--out results/committed-eval] [--episodes 100]
+    python -m train.publish.report_committed --out DIR [--episodes 100] [--tasks ...]   # all under DIR
+    python -m train.publish.report_committed --overwrite [--episodes 100]   # into the tracked files
 
 For each task: ``formation-env evaluate`` with the three seeds, ``pid`` and ``pid_formation`` (frozen
 Dryden turbulence sigma 1 m/s, wake on, seeds 20000000000..), written to ``OUT/<task>/``; the slim record
-(per-episode metrics, summaries, paired comparisons, seed groups) to
-``train/policies/<task>_ppo_setpoints_evaluation.json``; each policy's ``NAME.json`` gets its summary and
-comparisons. Figures: ``docs/figures/eval_<task>_slot_error.png`` and ``docs/figures/training_curves.png``
-(validation curves with the baselines' RMS on the same 32 validation episodes).
+(per-episode metrics, summaries, paired comparisons, seed groups) ``<task>_ppo_setpoints_evaluation.json``;
+each policy's ``NAME.json`` with its summary and comparisons. Figures: ``eval_<task>_slot_error.png`` and
+``training_curves.png`` (validation curves with the baselines' RMS on the same validation episodes).
+
+Without ``--overwrite`` the records, metadata and figures go to ``OUT/policies/`` and ``OUT/figures/``
+(nothing tracked is touched; OUT must be new or empty); with ``--overwrite`` they replace
+``train/policies/`` and ``docs/figures/`` (the evaluation directories still go to OUT). Every input and
+every file to be written is checked before the first episode flies, so a run never stops half way on a
+file it may not write.
 """
 
 from __future__ import annotations
 
 import argparse
 import json
+import os
 import shutil
+import sys
 from pathlib import Path
 
+from formation_env.io import atomic_write, atomic_write_json
+
 from ..config import VALIDATION_SEED_BASE
-from ..evaluate import evaluate
-from .publish import POLICIES, attach_evaluation, plot_validation_curves
+from ..evaluation.evaluate import MAX_EPISODES, evaluate
+from . import publish
+from .publish import attach_evaluation, plot_validation_curves
 
 TASKS = ("formation_keeping", "close_formation", "reconfiguration")
 FIGURES = Path(__file__).resolve().parents[2] / "docs" / "figures"
+DEFAULT_OUT = "results/committed-eval"
 
 
 def policy_names(task: str) -> list[str]:
     return [f"{task}_ppo_setpoints_seed{k}" for k in range(3)]
 
 
-def main() -> None:
+def plan(out: Path, tasks, *, overwrite: bool) -> dict:
+    """Where every output goes: {"policies": dir of records and NAME.json, "figures": dir, "eval": {task:
+    dir}, "files": [every file written]}."""
+    policies = publish.POLICIES if overwrite else out / "policies"
+    figures = FIGURES if overwrite else out / "figures"
+    files = [out / "validation_baselines.json", figures / "training_curves.png"]
+    for task in tasks:
+        files += [out / task / "results.json", out / task / "results.md", policies / f"{task}_ppo_setpoints_evaluation.json",
+                  figures / f"eval_{task}_slot_error.png"] + [policies / f"{n}.json" for n in policy_names(task)]
+    return {"policies": policies, "figures": figures, "eval": {t: out / t for t in tasks}, "files": files}
+
+
+def _writable_dir(d: Path) -> str | None:
+    """None if files can be created in ``d`` (it exists writable, or its nearest existing parent is)."""
+    p = d
+    while not p.exists() and p != p.parent:
+        p = p.parent
+    if not p.is_dir():
+        return f"{str(p)!r} is not a directory"
+    if not os.access(p, os.W_OK | os.X_OK):
+        return f"{str(p)!r} is not writable"
+    return None
+
+
+def check_plan(out: Path, tasks, *, overwrite: bool) -> dict:
+    """Raise ValueError (one line) unless every input exists and every output may be written."""
+    p = plan(out, tasks, overwrite=overwrite)
+    for task in tasks:
+        for n in policy_names(task):
+            for suffix in (".zip", ".json", "_evaluations.json"):
+                src = publish.POLICIES / f"{n}{suffix}"
+                if not src.is_file():
+                    raise ValueError(f"missing committed file {str(src)!r} (run train/committed_runs.sh first)")
+    if out.exists() and not out.is_dir():
+        raise ValueError(f"--out {str(out)!r} exists and is not a directory")
+    if not overwrite and out.is_dir() and any(out.iterdir()):
+        raise ValueError(f"--out {str(out)!r} exists and is not empty (choose a new or empty directory)")
+    for f in p["files"]:
+        if f.exists() and not overwrite:
+            raise ValueError(f"refusing to overwrite {str(f)!r} (choose a new or empty --out)")
+        if f.exists() and (not f.is_file() or not os.access(f, os.W_OK)):
+            raise ValueError(f"cannot overwrite {str(f)!r}: not a writable file")
+        why = _writable_dir(f.parent)
+        if why:
+            raise ValueError(f"cannot write {str(f)!r}: {why}")
+    return p
+
+
+def _parser() -> argparse.ArgumentParser:
+    def episodes(text: str) -> int:
+        try:
+            value = int(text)
+        except ValueError:
+            value = 0
+        if not 1 <= value <= MAX_EPISODES:
+            raise argparse.ArgumentTypeError(f"must be an integer in [1, {MAX_EPISODES}], got {text!r}")
+        return value
+
     ap = argparse.ArgumentParser(prog="python -m train.publish.report_committed", description=__doc__.splitlines()[0])
-    ap.add_argument("--out", default="results/committed-eval")
-    ap.add_argument("--episodes", type=int, default=100)
+    ap.add_argument("--out", default=DEFAULT_OUT,
+                    help=f"output directory (default {DEFAULT_OUT}): the evaluations, and without --overwrite "
+                         "also the records, metadata (policies/) and figures (figures/)")
+    ap.add_argument("--overwrite", action="store_true",
+                    help="write the records, metadata and figures into train/policies/ and docs/figures/ (tracked)")
+    ap.add_argument("--episodes", type=episodes, default=100, help="held-out test episodes per policy (default 100)")
+    ap.add_argument("--validation-episodes", type=episodes, default=32,
+                    help="validation episodes of the baselines' lines in training_curves.png (default 32)")
     ap.add_argument("--tasks", nargs="+", default=list(TASKS), choices=TASKS)
-    a = ap.parse_args()
+    return ap
+
+
+def main(argv: list[str] | None = None) -> int:
+    a = _parser().parse_args(argv)
     out = Path(a.out)
+    try:
+        p = check_plan(out, a.tasks, overwrite=a.overwrite)
+    except ValueError as exc:
+        print(f"{_parser().prog}: error: {exc}", file=sys.stderr)
+        return 2
+    print(f"writing the evaluations to {out}/, records and metadata to {p['policies']}/, figures to {p['figures']}/",
+          file=sys.stderr)
     baselines = {}
     for task in a.tasks:
         names = policy_names(task)
-        rep = evaluate([str(POLICIES / f"{n}.zip") for n in names] + ["pid", "pid_formation"], scenario=task,
-                       episodes=a.episodes, out_dir=out / task, log=print)
+        rep = evaluate([str(publish.POLICIES / f"{n}.zip") for n in names] + ["pid", "pid_formation"], scenario=task,
+                       episodes=a.episodes, out_dir=p["eval"][task], overwrite=a.overwrite, log=print)
         print(rep["table_markdown"])
         print(rep.get("comparison_markdown", ""))
         print(rep.get("groups_markdown", ""))
-        record = POLICIES / f"{task}_ppo_setpoints_evaluation.json"
-        attach_evaluation(names, out / task / "results.json", record)
-        shutil.copyfile(out / task / "slot_error.png", FIGURES / f"eval_{task}_slot_error.png")
-        val = evaluate(["pid", "pid_formation"], scenario=task, episodes=32, seeds=[VALIDATION_SEED_BASE],
-                       plots=False)
+        attach_evaluation(names, p["eval"][task] / "results.json",
+                          p["policies"] / f"{task}_ppo_setpoints_evaluation.json", overwrite=a.overwrite,
+                          meta_dir=p["policies"])
+        atomic_write(p["figures"] / f"eval_{task}_slot_error.png",
+                     lambda tmp, src=p["eval"][task] / "slot_error.png": shutil.copyfile(src, tmp), overwrite=a.overwrite)
+        val = evaluate(["pid", "pid_formation"], scenario=task, episodes=a.validation_episodes,
+                       seeds=[VALIDATION_SEED_BASE], plots=False)
         baselines[task] = {f"{n} (validation)": val["policies"][n]["summary"]["rms_slot_error_m"]
                            for n in ("pid", "pid_formation")}
-    (out / "validation_baselines.json").write_text(json.dumps(baselines, indent=2))
-    plot_validation_curves({t: policy_names(t) for t in a.tasks}, FIGURES / "training_curves.png", baselines=baselines)
+    atomic_write_json(out / "validation_baselines.json", baselines, overwrite=a.overwrite)
+    plot_validation_curves({t: policy_names(t) for t in a.tasks}, p["figures"] / "training_curves.png",
+                           baselines=baselines)
+    print(f"done: evaluations in {out}/<task>/, records and metadata in {p['policies']}/, figures in {p['figures']}/")
+    return 0
 
 
 if __name__ == "__main__":
-    main()
+    sys.exit(main())
