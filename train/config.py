@@ -71,11 +71,16 @@ def env_config_for(scenario: str, action_mode: str, env_kwargs: dict, **override
     format; ``learning`` defaults to followers; flat observations). Shared by both backends."""
     from formation_env.envs.config import EnvConfig, Randomisation, RewardWeights
 
+    if not isinstance(env_kwargs, dict):
+        raise ValueError(f"env_kwargs must be a mapping of EnvConfig options, got {env_kwargs!r}")
     kw = copy.deepcopy(env_kwargs)
     kw.update(overrides)
     try:
         rnd = kw.pop("randomisation", {}) or {}
         rew = kw.pop("reward", {}) or {}
+        for name, value, cls in (("randomisation", rnd, Randomisation), ("reward", rew, RewardWeights)):
+            if not isinstance(value, (dict, cls)):
+                raise ValueError(f"env_kwargs.{name} must be a mapping of {cls.__name__} fields, got {value!r}")
         if not isinstance(rnd, Randomisation):
             rnd = Randomisation(**rnd)
         if not isinstance(rew, RewardWeights):

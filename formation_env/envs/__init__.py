@@ -16,10 +16,11 @@ def parallel_env(scenario: str = "formation_keeping", render_mode: str | None = 
 
 
 def env(scenario: str = "formation_keeping", render_mode: str | None = None, **options):
-    """The PettingZoo AEC version of :func:`parallel_env`."""
-    from pettingzoo.utils.conversions import parallel_to_aec
+    """The PettingZoo AEC version of :func:`parallel_env` (PettingZoo's ``parallel_to_aec``, except that the
+    ``step`` receiving an action checks it: :func:`formation_env.envs.compat.checked_parallel_to_aec`)."""
+    from .compat import checked_parallel_to_aec
 
-    return parallel_to_aec(parallel_env(scenario, render_mode=render_mode, **options))
+    return checked_parallel_to_aec(parallel_env(scenario, render_mode=render_mode, **options))
 
 
 def __getattr__(name):  # the vector envs import stable-baselines3: load them on first use

@@ -17,7 +17,8 @@ formation_env/CloseFormation-v0          close_formation    follower (uav_1)
 Keyword arguments of ``gymnasium.make`` go to :class:`~formation_env.envs.config.EnvConfig`
 (e.g. ``action_mode="residual"``, ``randomisation=Randomisation(...)``), plus ``learner`` (the UAV
 index; ``learning=(i,)`` means the same) and ``render_mode``. An unknown keyword raises ``TypeError``,
-a bad value ``ValueError``. Each id's ``spec.max_episode_steps`` is one full episode at 10 Hz.
+a bad value ``ValueError``. An id fixes its scenario: ``scenario=`` (or a ``config``) naming another one is a
+``ValueError`` (use that scenario's id, or :func:`formation_env.parallel_env` for any scenario). Each id's ``spec.max_episode_steps`` is one full episode at 10 Hz.
 """
 
 from __future__ import annotations
@@ -52,6 +53,19 @@ def _episode_decisions(cfg: EnvConfig) -> int:
     return -(-physics_steps // substeps)  # the step truncates once the physics steps reach the duration
 
 
+def _check_id_scenario(registered: str | None, config, options: dict) -> None:
+    """A registered id flies its own scenario: another one passed to ``gym.make`` is an error, not a switch."""
+    if registered is None:
+        return
+    asked = options.get("scenario", registered) if config is None else getattr(config, "scenario", registered)
+    name = getattr(asked, "name", asked)
+    if name != registered:
+        ids = {sc: i for i, (sc, _) in GYM_IDS.items()}
+        hint = f"use {ids[name]!r}" if isinstance(name, str) and name in ids else "use its id"
+        raise ValueError(f"this Gymnasium id flies scenario {registered!r}; got scenario={name!r}: {hint}, or "
+                         f"formation_env.parallel_env({name!r}, ...) for any scenario")
+
+
 class FormationGymEnv(gym.Env):
     """One learning UAV (``learner``, default: uav_1, or uav_0 in a one-UAV scenario); the others fly the
     PID baseline. ``learning=(i,)`` is accepted as a synonym of ``learner=i``; any ``learning`` that
@@ -61,7 +75,9 @@ class FormationGymEnv(gym.Env):
     metadata = {"render_modes": ["rgb_array", "human"], "render_fps": 10}
 
     def __init__(self, config: EnvConfig | None = None, learner: int | None = None, render_mode: str | None = None,
-                 **options):
+                 *, registered_scenario: str | None = None, **options):
+        # ``registered_scenario``: set by the registered ids (register_envs), never by a user
+        _check_id_scenario(registered_scenario, config, options)
         learning_given = "learning" in options or (config is not None and config.learning != "all")
         cfg = make_config(config, **options)
         if learner is not None and (isinstance(learner, bool) or not isinstance(learner, (int, np.integer))):
@@ -121,4 +137,4 @@ def register_envs() -> None:
         if env_id not in gym.registry:
             gym.register(env_id, entry_point="formation_env.envs.gym_env:FormationGymEnv",
                          max_episode_steps=_episode_decisions(EnvConfig(scenario=scenario, **task_options(scenario))),
-                         kwargs={"scenario": scenario})
+                         kwargs={"scenario": scenario, "registered_scenario": scenario})

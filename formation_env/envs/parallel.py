@@ -25,7 +25,50 @@ from ..tasks import make_config
 from .config import EnvConfig
 from .observations import OBS_CLIP, group_sizes, observation_size, to_dict
 
-__all__ = ["FormationParallelEnv", "make_config"]
+__all__ = ["FormationParallelEnv", "make_config", "check_action", "reset_options", "IGNORED_RESET_OPTIONS"]
+
+#: reset options accepted and ignored: exactly the key PettingZoo's own ``parallel_api_test`` and
+#: ``api_test`` pass (``reset(seed=0, options={"options": 1})``, a placeholder testing that options are
+#: accepted); Gymnasium's checker passes ``options={}``, which is fine as is.
+IGNORED_RESET_OPTIONS: tuple[str, ...] = ("options",)
+
+
+def reset_options(options) -> dict | None:
+    """``options`` of a ``reset`` checked: None or a dict of :data:`formation_env.sim.simulation.RESET_OPTIONS`
+    (an unknown key is a ``TypeError`` naming it and listing the valid ones); returns what goes to
+    :meth:`Simulation.reset`, which checks the values."""
+    from ..sim.simulation import RESET_OPTIONS
+
+    if options is None:
+        return None
+    if not isinstance(options, dict):
+        raise ValueError(f"reset options must be a dict or None, got {type(options).__name__}")
+    unknown = sorted((str(k) for k in set(options) - set(RESET_OPTIONS) - set(IGNORED_RESET_OPTIONS)))
+    if unknown:
+        raise TypeError(f"unknown reset option(s) {unknown}; valid reset options: {list(RESET_OPTIONS)} (the "
+                        "scenario, duration_s and every other EnvConfig option are set when the env is made)")
+    return {k: v for k, v in options.items() if k in RESET_OPTIONS} or None
+
+
+def check_action(agent: str, action) -> np.ndarray:
+    """One agent's action as 4 finite floats clipped to [-1, 1]; anything else (bool, complex, strings,
+    NaN/inf, another shape) is a ``ValueError`` naming ``agent``."""
+    raw = np.asarray(action)
+    if raw.dtype == bool:
+        raise ValueError(f"action of {agent!r} is boolean; actions must be 4 real numbers in [-1, 1], got {action!r}")
+    if np.iscomplexobj(raw):
+        raise ValueError(f"action of {agent!r} is complex ({raw.dtype}); actions must be real numbers in [-1, 1]")
+    if raw.dtype == object and any(isinstance(x, (bool, np.bool_)) for x in raw.reshape(-1)):
+        raise ValueError(f"action of {agent!r} holds booleans; actions must be 4 real numbers in [-1, 1], got {action!r}")
+    try:
+        a = np.asarray(raw, dtype=float)
+    except (TypeError, ValueError):
+        raise ValueError(f"action of {agent!r} must be 4 real numbers, got {action!r}") from None
+    if a.shape != (4,):
+        raise ValueError(f"action of {agent!r} must have shape (4,), got {a.shape}")
+    if not np.all(np.isfinite(a)):
+        raise ValueError(f"action of {agent!r} contains NaN or inf: {a.tolist()}")
+    return np.clip(a, -1.0, 1.0)  # the Box is [-1, 1]; out-of-range values saturate
 
 
 class FormationParallelEnv(ParallelEnv):
@@ -54,6 +97,7 @@ class FormationParallelEnv(ParallelEnv):
         self.state_space = spaces.Box(-OBS_CLIP, OBS_CLIP, (n * observation_size(n),), dtype=np.float32)
         self._entropy = np.random.SeedSequence()
         self._renderer = None
+        self._was_reset = False
 
     # ---------------------------------------------------------------- spaces
     @functools.lru_cache(maxsize=None)  # noqa: B019 - one space object per agent, as PettingZoo expects
@@ -72,10 +116,10 @@ class FormationParallelEnv(ParallelEnv):
 
     # ---------------------------------------------------------------- API
     def reset(self, seed: int | None = None, options: dict | None = None):
-        # ``options`` is accepted for API compatibility (PettingZoo's own test passes some); the env is
-        # configured at construction, so nothing in it is used.
-        if options is not None and not isinstance(options, dict):
-            raise ValueError(f"options must be a dict or None, got {type(options).__name__}")
+        # ``options``: the simulation's reset options (formation_env.sim.simulation.RESET_OPTIONS); an
+        # unknown one is a TypeError listing them (the env is configured at construction: scenario,
+        # duration_s, ... are not reset options)
+        sim_options = reset_options(options)
         if seed is None:
             seed = int(self._entropy.spawn(1)[0].generate_state(1)[0])
         elif isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
@@ -84,11 +128,14 @@ class FormationParallelEnv(ParallelEnv):
             # Gymnasium's convention: a seed also seeds the stream later unseeded resets draw from, so a
             # trainer that seeds only the first reset (RLlib's env runners do) replays exactly.
             self._entropy = np.random.SeedSequence(int(seed))
-        self.sim.reset(seeds=[int(seed)])
+        self.sim.reset(seeds=[int(seed)], options=sim_options)
+        self._was_reset = True
         self.agents = list(self.possible_agents)
         return self._observations(), self._infos()
 
     def step(self, actions: dict):
+        if not self._was_reset:
+            raise RuntimeError("step() before any reset(): call reset() first")
         if not self.agents:
             raise RuntimeError("step() called on a finished episode; call reset() first")
         act = self._validate_actions(actions)
@@ -135,18 +182,8 @@ class FormationParallelEnv(ParallelEnv):
             raise ValueError(f"missing actions for agent(s) {missing}")
         act = np.zeros((len(self.possible_agents), 4))
         for k, agent in enumerate(self.possible_agents):
-            raw = np.asarray(actions[agent])
-            if np.iscomplexobj(raw):
-                raise ValueError(f"action of {agent!r} is complex ({raw.dtype}); actions must be real numbers in [-1, 1]")
-            try:
-                a = np.asarray(raw, dtype=float)
-            except (TypeError, ValueError):
-                raise ValueError(f"action of {agent!r} must be 4 real numbers, got {actions[agent]!r}") from None
-            if a.shape != (4,):
-                raise ValueError(f"action of {agent!r} must have shape (4,), got {a.shape}")
-            if not np.all(np.isfinite(a)):
-                raise ValueError(f"action of {agent!r} contains NaN or inf: {a.tolist()}")
-            act[k] = np.clip(a, -1.0, 1.0)  # the Box is [-1, 1]; out-of-range values saturate
+            if agent in actions:
+                act[k] = check_action(agent, actions[agent])
         return act
 
     def _observations(self) -> dict:

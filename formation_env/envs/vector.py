@@ -35,6 +35,18 @@ __all__ = ["FormationVecEnv", "FormationVectorEnv", "BatchedFormations"]
 
 _RENDER_MODES = ("rgb_array",)
 
+#: most formations one vector env may hold (more is a ValueError, not numpy's MemoryError): each holds its
+#: UAVs' state, wake and turbulence arrays, 12 kB (formation_keeping) to 30 kB (a turbulent vee) measured,
+#: so 65,536 of them is ~1-2 GB before the learner's own buffers
+MAX_FORMATIONS = 65_536
+
+
+def _check_n_formations(n_formations) -> int:
+    if isinstance(n_formations, (bool, np.bool_)) or not isinstance(n_formations, (int, np.integer)) \
+            or not 1 <= n_formations <= MAX_FORMATIONS:
+        raise ValueError(f"n_formations must be an integer in [1, {MAX_FORMATIONS}], got {n_formations!r}")
+    return int(n_formations)
+
 
 def _check_render_mode(render_mode) -> str | None:
     if render_mode is not None and render_mode not in _RENDER_MODES:
@@ -65,6 +77,7 @@ class BatchedFormations:
     """Shared logic of the vector envs: flat (num_envs, ...) arrays over a :class:`~formation_env.sim.Simulation`."""
 
     def __init__(self, n_formations: int, config: EnvConfig, seed: int | None = None) -> None:
+        n_formations = _check_n_formations(n_formations)
         if config.obs_mode != "flat":
             raise ValueError("vector envs use flat observations (obs_mode='flat')")
         self.sim = Simulation(config, batch_size=n_formations)
@@ -76,6 +89,7 @@ class BatchedFormations:
         self._seed_stream = np.random.SeedSequence(seed)
         self._pending_seeds: list[int | None] = [None] * self.n_formations
         self.t_start = time.perf_counter()
+        self.was_reset = False
 
     def set_seed(self, seed: int | None) -> None:
         if seed is None:
@@ -101,6 +115,7 @@ class BatchedFormations:
     def reset(self, formations=None) -> None:
         idx = np.arange(self.n_formations) if formations is None else np.asarray(formations, dtype=np.int64)
         self.sim.reset(idx, self._seeds_for(idx))
+        self.was_reset = True
 
     def observations(self) -> np.ndarray:
         obs = self.sim.output.observation[:, self.agents]
@@ -108,6 +123,8 @@ class BatchedFormations:
 
     def validate(self, actions) -> np.ndarray:
         raw = np.asarray(actions)
+        if raw.dtype == bool:
+            raise ValueError(f"actions are boolean; actions must be real numbers in [-1, 1] of shape ({self.num_envs}, 4)")
         if np.iscomplexobj(raw):
             bad = np.nonzero(np.any(np.imag(raw).reshape(len(raw), -1) != 0, axis=1))[0].tolist() if raw.ndim else []
             raise ValueError(f"actions are complex ({raw.dtype}; env index(es) with an imaginary part: {bad}); "
@@ -123,6 +140,8 @@ class BatchedFormations:
     def step(self, actions: np.ndarray):
         """Returns obs (after auto-reset), rewards, terminated, truncated (num_envs,) and, for the
         finished formations, their final observations (num_envs, D) and finished mask."""
+        if not self.was_reset:
+            raise RuntimeError("step() before any reset(): call reset() first")
         a = self.validate(actions).reshape(self.n_formations, self.agents_per_formation, 4)
         out = self.sim.step(a)
         rewards, term_f, trunc_f = out.reward[:, self.agents].reshape(-1), out.terminated.copy(), out.truncated.copy()

@@ -1,27 +1,105 @@
-"""Environment configuration: frozen dataclasses validated on construction (ValueError names the field)."""
+"""Environment configuration: frozen dataclasses validated on construction (ValueError names the field).
+
+Every numeric option has a type and a physical range, all in one table, :data:`OPTION_RANGES`
+(``"Owner.name" -> (min, max, unit, why)``); docs/env.md's "Option ranges" table is the same table
+(``tests/envs/test_validation.py`` holds them equal). A value outside it is a ``ValueError`` naming the
+option, the value and the range."""
 
 from __future__ import annotations
 
 import math
+import numbers
 from dataclasses import dataclass, field, fields
 
 import numpy as np
 
-__all__ = ["ACTION_MODES", "OBS_MODES", "TURBULENCE_FIELDS", "RewardWeights", "Randomisation", "EnvConfig"]
+from ..constants import MAX_DURATION_S
+
+__all__ = ["ACTION_MODES", "OBS_MODES", "TURBULENCE_FIELDS", "OPTION_RANGES", "RewardWeights", "Randomisation",
+           "EnvConfig"]
 
 ACTION_MODES = ("surfaces", "residual", "setpoints")
 OBS_MODES = ("flat", "dict")
 TURBULENCE_FIELDS = ("frozen", "independent")
 
+_WEIGHT = (0.0, 1e4, "", "a reward weight: non-negative and bounded, so a decision's reward stays finite "
+           "(1e4 x the largest term is far below the float range)")
 
-def _finite(owner: str, name: str, value, *, minimum: float | None = None, positive: bool = False) -> float:
-    if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
-        raise ValueError(f"{owner}: {name} must be a finite number, got {value!r}")
-    if positive and value <= 0:
-        raise ValueError(f"{owner}: {name} must be > 0, got {value!r}")
-    if minimum is not None and value < minimum:
-        raise ValueError(f"{owner}: {name} must be >= {minimum}, got {value!r}")
-    return float(value)
+#: every numeric option: "Owner.name" -> (min, max, unit, why); min and max inclusive. For a 25 m/s,
+#: 2.9 m span UAV (the Aerosonde) at 1000 m, physics at 50 Hz.
+OPTION_RANGES: dict[str, tuple[float, float, str, str]] = {
+    "EnvConfig.control_hz": (0.5, 50.0, "Hz", "decision rate; must also divide the physics rate (50 Hz): at most one "
+                             "decision per physics step, at least one every 2 s (100 physics steps)"),
+    "EnvConfig.collision_separation_b": (0.0, 2.0, "spans", "CG separation that ends the episode; the closest slot "
+                                         "(formation_keeping, 2.2 spans away) must stay outside it"),
+    "EnvConfig.duration_s": (0.02, MAX_DURATION_S, "s", "episode length: at least one physics step (the scenario's "
+                             "dt, 0.02 s in every built-in scenario), at most MAX_DURATION_S (one hour of flight)"),
+    "EnvConfig.wake_update_every": (1, 50, "physics steps", "integer; ELL solves held at most 1 s (50 steps at "
+                                    "50 Hz): the wake geometry moves a span in ~0.1 s"),
+    "RewardWeights.slot": _WEIGHT,
+    "RewardWeights.slot_scale_m": (0.1, 1000.0, "m", "Huber knee of the slot error: from a tenth of a metre to "
+                                   "the whole formation"),
+    "RewardWeights.effort": _WEIGHT,
+    "RewardWeights.rate": _WEIGHT,
+    "RewardWeights.benefit": _WEIGHT,
+    "RewardWeights.progress": _WEIGHT,
+    "RewardWeights.shaping_gamma": (0.0, 1.0, "", "a discount factor"),
+    "RewardWeights.terminal_forfeit": (0.0, 10.0, "", "multiple of the slot cost still to come that a collision or "
+                                       "crash forfeits (1: ending is never cheaper than flying on)"),
+    "RewardWeights.separation": _WEIGHT,
+    "RewardWeights.barrier_separation_b": (0.0, 10.0, "spans", "where the separation barrier starts (29 m): "
+                                           "beyond every slot of the built-in formations"),
+    "RewardWeights.collision": _WEIGHT,
+    "RewardWeights.crash": _WEIGHT,
+    "RewardWeights.box": _WEIGHT,
+    "RewardWeights.box_scale_b": (0.01, 10.0, "spans", "Huber knee of the depth outside the safe box (3 cm to "
+                                  "29 m)"),
+    "Randomisation.initial_offset_m": (0.0, 50.0, "m", "std of the initial position jitter: up to ~6 slot "
+                                       "spacings; beyond, followers start in another formation's place"),
+    "Randomisation.slot_offset_b": (0.0, 2.0, "spans", "std of the slot jitter: about one slot spacing "
+                                    "(2 spans) at most"),
+    "Randomisation.steady_wind_mps": (0.0, 20.0, "m/s", "steady wind below the 25 m/s airspeed, so the "
+                                      "formation can still make ground along its track (20 m/s: a strong gale)"),
+    "Randomisation.crosswind_mps": (0.0, 20.0, "m/s", "as steady_wind_mps: a 20 m/s crosswind crabs a "
+                                    "25 m/s UAV by 53 deg"),
+    "Randomisation.turbulence_sigma_mps": (0.0, 10.0, "m/s", "Dryden intensity: MIL-F-8785C severe turbulence "
+                                           "(exceeded with probability 1e-5) is ~5-7 m/s at low and medium "
+                                           "altitude, extreme (1e-6) ~8-10 m/s"),
+    "Randomisation.leader_turn_deg": (0.0, 180.0, "deg", "heading change of the leader's manoeuvre: a turn "
+                                      "about (beyond 180 deg the same heading is reached the other way)"),
+    "Randomisation.leader_climb_m": (0.0, 500.0, "m", "altitude change of the leader's manoeuvre: half the "
+                                     "1000 m altitude, so a descent stays clear of the ground"),
+    "Randomisation.leader_speed_mps": (0.0, 10.0, "m/s", "speed change of the leader's manoeuvre: 25 +- 10 m/s "
+                                       "stays inside the model's 15-50 m/s airspeed bounds"),
+}
+
+
+def _is_real(value) -> bool:
+    if not isinstance(value, numbers.Real) or isinstance(value, (bool, np.bool_)):
+        return False
+    try:
+        return math.isfinite(float(value))
+    except OverflowError:  # an int beyond the float range
+        return False
+
+
+def _in_range(owner: str, name: str, value, *, integer: bool = False, low: float | None = None) -> float | int:
+    """``value`` checked against ``OPTION_RANGES[owner.name]`` (``low`` overrides the minimum)."""
+    lo, hi, unit, why = OPTION_RANGES[f"{owner}.{name}"]
+    lo = lo if low is None else low
+    span = f"[{lo:g}, {hi:g}]" + (f" {unit}" if unit else "")
+    if not _is_real(value) or (integer and not isinstance(value, (int, np.integer))):
+        kind = "an integer" if integer else "a finite number"
+        raise ValueError(f"{owner}: {name} must be {kind} in {span} ({why}), got {value!r}")
+    if not lo <= value <= hi:
+        raise ValueError(f"{owner}: {name} must be in {span} ({why}), got {value!r}")
+    return int(value) if integer else float(value)
+
+
+def _validate_fields(obj) -> None:
+    owner = type(obj).__name__
+    for f in fields(obj):
+        object.__setattr__(obj, f.name, _in_range(owner, f.name, getattr(obj, f.name)))
 
 
 @dataclass(frozen=True)
@@ -70,12 +148,7 @@ class RewardWeights:
     box_scale_b: float = 0.1
 
     def __post_init__(self) -> None:
-        for f in fields(self):
-            _finite("RewardWeights", f.name, getattr(self, f.name), minimum=0.0)
-        _finite("RewardWeights", "slot_scale_m", self.slot_scale_m, positive=True)
-        _finite("RewardWeights", "box_scale_b", self.box_scale_b, positive=True)
-        if self.shaping_gamma > 1.0:
-            raise ValueError(f"RewardWeights: shaping_gamma must be in [0, 1], got {self.shaping_gamma!r}")
+        _validate_fields(self)  # each weight within OPTION_RANGES (a number, never bool)
 
 
 @dataclass(frozen=True)
@@ -105,8 +178,7 @@ class Randomisation:
     leader_speed_mps: float = 0.0
 
     def __post_init__(self) -> None:
-        for f in fields(self):
-            _finite("Randomisation", f.name, getattr(self, f.name), minimum=0.0)
+        _validate_fields(self)
 
     @property
     def any_manoeuvre(self) -> bool:
@@ -153,41 +225,61 @@ class EnvConfig:
     randomisation: Randomisation = field(default_factory=Randomisation)
 
     def __post_init__(self) -> None:
-        from ..scenarios import Scenario, scenario_names
+        from ..scenarios import Scenario, get_scenario, scenario_names
 
-        if not isinstance(self.scenario, Scenario) and self.scenario not in scenario_names():
+        if not isinstance(self.scenario, Scenario) and (not isinstance(self.scenario, str)
+                                                        or self.scenario not in scenario_names()):
             raise ValueError(f"EnvConfig: unknown scenario {self.scenario!r}; available: {scenario_names()}")
-        if self.action_mode not in ACTION_MODES:
-            raise ValueError(f"EnvConfig: action_mode must be one of {ACTION_MODES}, got {self.action_mode!r}")
-        if self.obs_mode not in OBS_MODES:
-            raise ValueError(f"EnvConfig: obs_mode must be one of {OBS_MODES}, got {self.obs_mode!r}")
-        if self.turbulence_field not in TURBULENCE_FIELDS:
-            raise ValueError(f"EnvConfig: turbulence_field must be one of {TURBULENCE_FIELDS}, got {self.turbulence_field!r}")
-        _finite("EnvConfig", "control_hz", self.control_hz, positive=True)
-        _finite("EnvConfig", "collision_separation_b", self.collision_separation_b, minimum=0.0)
-        if self.duration_s is not None:
-            _finite("EnvConfig", "duration_s", self.duration_s, positive=True)
-        if isinstance(self.wake_update_every, bool) or not isinstance(self.wake_update_every, int) or self.wake_update_every < 1:
-            raise ValueError(f"EnvConfig: wake_update_every must be an integer >= 1, got {self.wake_update_every!r}")
-        if not (self.wake is None or isinstance(self.wake, bool)):
-            raise ValueError(f"EnvConfig: wake must be True, False or None, got {self.wake!r}")
-        if isinstance(self.learning, str):
-            if self.learning not in ("all", "followers"):
-                raise ValueError(f"EnvConfig: learning must be 'all', 'followers' or a tuple of indices, got {self.learning!r}")
-        else:
-            try:
-                items = tuple(self.learning)
-            except TypeError:
-                raise ValueError(f"EnvConfig: learning must be 'all', 'followers' or a tuple of indices, got {self.learning!r}") from None
-            bad = [i for i in items if isinstance(i, bool) or not isinstance(i, (int, np.integer))]
-            if bad:
-                raise ValueError(f"EnvConfig: learning indices must be integers (UAV indices), got {bad[0]!r} "
-                                 f"in {self.learning!r}")
-            idx = tuple(int(i) for i in items)
-            if not idx or len(set(idx)) != len(idx):
-                raise ValueError(f"EnvConfig: learning indices must be non-empty and unique, got {self.learning!r}")
-            object.__setattr__(self, "learning", idx)
+        for name, choices in (("action_mode", ACTION_MODES), ("obs_mode", OBS_MODES),
+                              ("turbulence_field", TURBULENCE_FIELDS)):
+            value = getattr(self, name)
+            if not isinstance(value, str) or value not in choices:
+                raise ValueError(f"EnvConfig: {name} must be one of {choices}, got {value!r}")
+        sc = self.scenario if isinstance(self.scenario, Scenario) else get_scenario(self.scenario)
+        physics_hz = 1.0 / sc.dt
+        hz = _in_range("EnvConfig", "control_hz", self.control_hz)
+        ratio = physics_hz / hz
+        if abs(ratio - round(ratio)) > 1e-9:
+            lo, hi, unit, why = OPTION_RANGES["EnvConfig.control_hz"]
+            divisors = [f"{physics_hz / k:g}" for k in range(1, 11) if physics_hz / k >= lo]
+            raise ValueError(f"EnvConfig: control_hz must divide the physics rate {physics_hz:g} Hz (e.g. "
+                             f"{', '.join(divisors)}, ... down to {lo:g} Hz), got {self.control_hz!r}")
+        object.__setattr__(self, "control_hz", hz)
+        object.__setattr__(self, "collision_separation_b",
+                           _in_range("EnvConfig", "collision_separation_b", self.collision_separation_b))
+        if self.duration_s is not None:  # at least one physics step of this scenario
+            object.__setattr__(self, "duration_s", _in_range("EnvConfig", "duration_s", self.duration_s, low=sc.dt))
+        object.__setattr__(self, "wake_update_every",
+                           _in_range("EnvConfig", "wake_update_every", self.wake_update_every, integer=True))
+        if not (self.wake is None or isinstance(self.wake, (bool, np.bool_))):
+            raise ValueError(f"EnvConfig: wake must be True, False or None (the scenario's default), got {self.wake!r}")
+        if self.wake is not None:
+            object.__setattr__(self, "wake", bool(self.wake))
+        if not isinstance(self.compute_benefit, (bool, np.bool_)):
+            raise ValueError(f"EnvConfig: compute_benefit must be True or False, got {self.compute_benefit!r}")
+        object.__setattr__(self, "compute_benefit", bool(self.compute_benefit))
+        object.__setattr__(self, "learning", _learning(self.learning))
         if not isinstance(self.reward, RewardWeights):
-            raise ValueError("EnvConfig: reward must be a RewardWeights")
+            raise ValueError(f"EnvConfig: reward must be a RewardWeights, got {type(self.reward).__name__}")
         if not isinstance(self.randomisation, Randomisation):
-            raise ValueError("EnvConfig: randomisation must be a Randomisation")
+            raise ValueError(f"EnvConfig: randomisation must be a Randomisation, got {type(self.randomisation).__name__}")
+
+
+def _learning(learning):
+    """``learning`` checked: "all", "followers" or a tuple/list of distinct UAV indices (returned as a tuple)."""
+    what = "'all', 'followers' or a tuple/list of UAV indices (ints)"
+    if isinstance(learning, str):
+        if learning not in ("all", "followers"):
+            raise ValueError(f"EnvConfig: learning must be {what}, got {learning!r}")
+        return learning
+    if not isinstance(learning, (tuple, list, range, np.ndarray)) or (isinstance(learning, np.ndarray)
+                                                                     and learning.ndim != 1):
+        raise ValueError(f"EnvConfig: learning must be {what}, got {learning!r} ({type(learning).__name__})")
+    items = tuple(learning)
+    bad = [i for i in items if isinstance(i, (bool, np.bool_)) or not isinstance(i, (int, np.integer))]
+    if bad:
+        raise ValueError(f"EnvConfig: learning indices must be integers (UAV indices), got {bad[0]!r} in {learning!r}")
+    idx = tuple(int(i) for i in items)
+    if not idx or len(set(idx)) != len(idx):
+        raise ValueError(f"EnvConfig: learning indices must be non-empty and unique, got {learning!r}")
+    return idx

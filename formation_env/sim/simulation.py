@@ -284,7 +284,7 @@ class Simulation:
         caller: the adapters check shape and finiteness), None for zeros."""
         if not self._reset_once.all():
             raise RuntimeError(f"step() before reset(): formation(s) {np.nonzero(~self._reset_once)[0].tolist()} "
-                               "were never reset")
+                               "were never reset; call reset() first")
         if actions is not None:
             self._actions[:, self.agent_mask] = actions
         step(self.params, self.state, self._actions, self.output)

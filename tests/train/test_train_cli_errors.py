@@ -26,7 +26,7 @@ def test_train_cli_unknown_algo_and_mode(capsys):
 def test_train_cli_negative_steps(capsys):
     with pytest.raises(SystemExit):
         main(["train", "--scenario", "formation_keeping", "--algo", "ppo", "--steps", "-5"])
-    assert "must be a positive integer" in capsys.readouterr().err
+    assert "--steps: must be an integer in [1, 1000000000], got '-5'" in capsys.readouterr().err
     with pytest.raises(SystemExit):
         main(["train", "--scenario", "formation_keeping", "--algo", "ppo", "--seed", "-1"])
 

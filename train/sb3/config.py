@@ -20,7 +20,10 @@ used for scenarios without their own), in the style of the RL Baselines3 Zoo::
 
 A ``--config FILE`` is the same format (a section keyed by the scenario, or a flat section) and is
 merged over the defaults key by key (``env_kwargs``, ``policy_kwargs`` and their sub-dicts merged
-too). Unknown keys raise ValueError naming them.
+too). Unknown keys raise ValueError naming them; every value is checked (type and range,
+:data:`HYPERPARAMETER_RANGES`, :data:`POLICY_KWARGS_RANGES`) when the TrainConfig is built, before the run
+directory or its ``config.yaml`` is written, into a one-line ValueError (never SB3's own assertion or a
+failure after training).
 """
 
 from __future__ import annotations
@@ -51,6 +54,142 @@ _ALGO_KEYS = {
 }
 _POLICY_KWARGS = {"net_arch", "log_std_init", "activation_fn", "ortho_init", "squash_output", "n_critics",
                   "use_expln", "full_std", "share_features_extractor"}
+
+MAX_TIMESTEPS = 10**9  # as the CLI's --steps (formation_env.cli._args.MAX_TRAIN_STEPS; a test holds them equal)
+ACTIVATIONS = ("tanh", "relu", "elu", "leaky_relu")  # policy_kwargs.activation_fn (train/sb3/train.py maps them)
+POLICIES = ("MlpPolicy",)  # the vector envs' observations are flat Boxes
+
+#: hyperparameter -> (kind, min, max, what): kind "int", "float", "bool", "float?" (None allowed); min and
+#: max inclusive, except a float min marked exclusive by being in _EXCLUSIVE_MIN. "ent_coef", "target_entropy"
+#: and "gradient_steps" take extra forms (see _check_special).
+HYPERPARAMETER_RANGES: dict[str, tuple[str, float, float, str]] = {
+    "learning_rate": ("float", 0.0, 1.0, "Adam step size"),
+    "n_steps": ("int", 1, 1_000_000, "rollout length per env index"),
+    "batch_size": ("int", 2, 10_000_000, "minibatch size (SB3 needs > 1)"),
+    "n_epochs": ("int", 1, 1000, "passes over each rollout"),
+    "gamma": ("float", 0.0, 1.0, "discount factor"),
+    "gae_lambda": ("float", 0.0, 1.0, "GAE lambda"),
+    "clip_range": ("float", 0.0, 10.0, "PPO ratio clip"),
+    "clip_range_vf": ("float?", 0.0, 1e6, "value clip (None: off)"),
+    "normalize_advantage": ("bool", 0, 1, ""),
+    "ent_coef": ("float", 0.0, 10.0, "entropy bonus"),
+    "vf_coef": ("float", 0.0, 100.0, "value-loss weight"),
+    "max_grad_norm": ("float", 0.0, 1e6, "gradient clip"),
+    "use_sde": ("bool", 0, 1, ""),
+    "sde_sample_freq": ("int", -1, 1_000_000, "-1: once per rollout"),
+    "target_kl": ("float?", 0.0, 10.0, "early-stop KL (None: off)"),
+    "buffer_size": ("int", 1, 100_000_000, "replay buffer transitions"),
+    "learning_starts": ("int", 0, MAX_TIMESTEPS, "env steps before learning"),
+    "tau": ("float", 0.0, 1.0, "target network soft-update rate"),
+    "train_freq": ("int", 1, 1_000_000, "vector steps between updates"),
+    "gradient_steps": ("int", -1, 10_000, "gradient steps per update (-1: as many as env steps)"),
+    "target_update_interval": ("int", 1, 1_000_000, "gradient steps between target updates"),
+    "use_sde_at_warmup": ("bool", 0, 1, ""),
+    "action_noise": ("float?", 0.0, 10.0, "Gaussian exploration noise std, normalised actions (None/0: off)"),
+    "policy_delay": ("int", 1, 1000, "critic updates per actor update"),
+    "target_policy_noise": ("float", 0.0, 10.0, "target smoothing noise std"),
+    "target_noise_clip": ("float", 0.0, 10.0, "target smoothing noise clip"),
+}
+_EXCLUSIVE_MIN = {"learning_rate", "clip_range", "clip_range_vf", "max_grad_norm", "target_kl", "tau"}
+
+#: policy_kwargs key -> (kind, min, max, what); net_arch and activation_fn are checked by _check_policy_kwargs
+POLICY_KWARGS_RANGES: dict[str, tuple[str, float, float, str]] = {
+    "log_std_init": ("float", -20.0, 2.0, "initial log std of the Gaussian policy"),
+    "ortho_init": ("bool", 0, 1, ""),
+    "squash_output": ("bool", 0, 1, ""),
+    "n_critics": ("int", 1, 10, "Q networks"),
+    "use_expln": ("bool", 0, 1, ""),
+    "full_std": ("bool", 0, 1, ""),
+    "share_features_extractor": ("bool", 0, 1, ""),
+}
+MAX_LAYER_WIDTH = 65_536
+
+
+def _check_value(where: str, name: str, value, spec, *, exclusive: bool | None = None) -> object:
+    """``value`` checked against ``spec`` = (kind, min, max, what); returns it (ints from integral floats)."""
+    kind, lo, hi, what = spec
+    about = f" ({what})" if what else ""
+    if kind == "bool":
+        if not isinstance(value, bool):
+            raise ValueError(f"{where}{name} must be true or false, got {value!r}")
+        return value
+    if kind == "float?" and value is None:
+        return None
+    if kind == "int":
+        if isinstance(value, float) and math.isfinite(value) and value.is_integer():
+            value = int(value)
+        if isinstance(value, bool) or not isinstance(value, int) or not lo <= value <= hi:
+            raise ValueError(f"{where}{name} must be an integer in [{lo}, {hi}]{about}, got {value!r}")
+        return value
+    exclusive = name in _EXCLUSIVE_MIN if exclusive is None else exclusive
+    span = f"{'(' if exclusive else '['}{lo:g}, {hi:g}]"
+    if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value) \
+            or not (lo < value if exclusive else lo <= value) or value > hi:
+        none = " or null" if kind == "float?" else ""
+        raise ValueError(f"{where}{name} must be a number in {span}{none}{about}, got {value!r}")
+    return value
+
+
+def _check_special(algo: str, name: str, value):
+    """The hyperparameters with more than one form; None where the generic table applies."""
+    where = f"{algo} hyperparameter "
+    if name == "ent_coef" and algo == "sac":  # "auto", "auto_<init>" or a number > 0
+        if isinstance(value, str):
+            init = value[5:] if value.startswith("auto_") else None
+            try:
+                ok = value == "auto" or (init is not None and math.isfinite(float(init)) and float(init) > 0)
+            except ValueError:
+                ok = False
+            if not ok:
+                raise ValueError(f"{where}ent_coef must be 'auto', 'auto_<initial value > 0>' or a number in (0, 10], "
+                                 f"got {value!r}")
+            return value
+        return _check_value(where, name, value, ("float", 0.0, 10.0, "SAC: 'auto' or a number"), exclusive=True)
+    if name == "target_entropy":  # "auto" or a number
+        if value == "auto":
+            return value
+        return _check_value(where, name, value, ("float", -1000.0, 1000.0, "'auto' or the target entropy"))
+    if name == "gradient_steps" and value == 0:
+        raise ValueError(f"{where}gradient_steps must be -1 or an integer in [1, 10000] (0 never trains), got 0")
+    return None
+
+
+def _check_hyperparameters(algo: str, kwargs: dict) -> dict:
+    out = {}
+    for name, value in kwargs.items():
+        special = _check_special(algo, name, value)
+        out[name] = special if special is not None else _check_value(f"{algo} hyperparameter ", name, value,
+                                                                      HYPERPARAMETER_RANGES[name])
+    return out
+
+
+def _check_net_arch(value) -> None:
+    def layers(v, what: str) -> None:
+        if not isinstance(v, list) or any(isinstance(w, bool) or not isinstance(w, int) or not 1 <= w <= MAX_LAYER_WIDTH
+                                          for w in v):
+            raise ValueError(f"policy_kwargs.{what} must be a list of layer widths (integers in [1, {MAX_LAYER_WIDTH}]), "
+                             f"got {v!r}")
+
+    if isinstance(value, dict):
+        bad = sorted(set(value) - {"pi", "vf", "qf"})
+        if bad:
+            raise ValueError(f"policy_kwargs.net_arch: unknown key(s) {bad}; a dict takes 'pi' and 'vf' (PPO) or 'qf' "
+                             f"(SAC, TD3), got {value!r}")
+        for k, v in value.items():
+            layers(v, f"net_arch.{k}")
+    else:
+        layers(value, "net_arch")
+
+
+def _check_policy_kwargs(kwargs: dict) -> None:
+    for name, value in kwargs.items():
+        if name == "net_arch":
+            _check_net_arch(value)
+        elif name == "activation_fn":
+            if not isinstance(value, str) or value.lower() not in ACTIVATIONS:
+                raise ValueError(f"policy_kwargs.activation_fn must be one of {ACTIVATIONS}, got {value!r}")
+        else:
+            _check_value("policy_kwargs.", name, value, POLICY_KWARGS_RANGES[name])
 
 
 def load_hyperparams(algo: str, scenario: str, config_file: str | Path | None = None) -> dict:
@@ -105,18 +244,28 @@ class TrainConfig:
             raise ValueError(f"seed must be >= 0, got {self.seed}")
         if self.n_timesteps <= 0:
             raise ValueError(f"steps (n_timesteps) must be a positive integer, got {self.n_timesteps}")
-        if self.n_formations < 1:
-            raise ValueError(f"n_formations must be >= 1, got {self.n_formations}")
+        if self.n_timesteps > MAX_TIMESTEPS:
+            raise ValueError(f"steps (n_timesteps) must be at most {MAX_TIMESTEPS:,}, got {self.n_timesteps}")
+        from formation_env.envs.vector import MAX_FORMATIONS
+
+        if not 1 <= self.n_formations <= MAX_FORMATIONS:
+            raise ValueError(f"n_formations must be in [1, {MAX_FORMATIONS}], got {self.n_formations}")
         for name in ("eval_freq", "checkpoint_freq"):
             if getattr(self, name) < 0:
                 raise ValueError(f"{name} must be >= 0 (0: off), got {getattr(self, name)}")
-        if self.eval_episodes < 1:
-            raise ValueError(f"eval_episodes must be >= 1, got {self.eval_episodes}")
+        if not 1 <= self.eval_episodes <= 10_000:
+            raise ValueError(f"eval_episodes must be in [1, 10000], got {self.eval_episodes}")
         if isinstance(self.reward_scale, bool) or not isinstance(self.reward_scale, (int, float)) \
-                or not math.isfinite(self.reward_scale) or self.reward_scale <= 0:
-            raise ValueError(f"reward_scale must be a finite number > 0, got {self.reward_scale!r}")
-        if self.torch_threads < 1:
-            raise ValueError(f"torch_threads must be >= 1, got {self.torch_threads}")
+                or not math.isfinite(self.reward_scale) or not 0 < self.reward_scale <= 1e3:
+            raise ValueError(f"reward_scale must be a finite number > 0 (and <= 1000), got {self.reward_scale!r}")
+        if not 1 <= self.torch_threads <= 1024:
+            raise ValueError(f"torch_threads must be in [1, 1024], got {self.torch_threads}")
+        if not isinstance(self.policy, str) or self.policy not in POLICIES:
+            raise ValueError(f"policy must be one of {POLICIES} (the envs' observations are flat), got {self.policy!r}")
+        for name in ("algo_kwargs", "policy_kwargs", "env_kwargs"):
+            if not isinstance(getattr(self, name), dict):
+                label = "hyperparameters" if name == "algo_kwargs" else name
+                raise ValueError(f"{label} must be a mapping, got {getattr(self, name)!r}")
         bad = sorted(set(self.algo_kwargs) - _ALGO_KEYS[self.algo])
         if bad:
             raise ValueError(f"unknown {self.algo} hyperparameter(s) {bad}; valid: {sorted(_ALGO_KEYS[self.algo] | _TRAIN_KEYS)}")
@@ -126,6 +275,8 @@ class TrainConfig:
         bad = sorted(set(self.env_kwargs) - ENV_KEYS)
         if bad:
             raise ValueError(f"unknown env_kwargs key(s) {bad}; valid: {sorted(ENV_KEYS)}")
+        self.algo_kwargs = _check_hyperparameters(self.algo, self.algo_kwargs)
+        _check_policy_kwargs(self.policy_kwargs)
         make_env_config(self)  # validates the environment options
 
     @classmethod
