@@ -27,7 +27,7 @@ def register(sub) -> None:
                    help="instead: RLlib env steps/s sampled with 1 and 2 env runners (needs the 'distributed' extra)")
     p.add_argument("--runners", type=nonneg_int, nargs="+", default=None, help="env runner counts for --rllib (default 1 2)")
     p.add_argument("--action-mode", default=None, choices=("surfaces", "residual", "setpoints"),
-                   help="action mode for --rllib (default residual)")
+                   help="action mode for --rllib (default setpoints)")
     p.add_argument("--envs-per-runner", type=positive_int, default=None, help="envs per env runner for --rllib (default 1)")
     p.add_argument("--address", default=None, help="Ray cluster for --rllib (default: a local instance)")
     p.set_defaults(func=run)

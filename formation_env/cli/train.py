@@ -50,7 +50,7 @@ def register(sub) -> None:
     p.add_argument("--algo", default=None, choices=ALGOS,
                    help="RL algorithm (sb3: required unless --resume; rllib: ppo, the default)")
     p.add_argument("--action-mode", default=None, choices=ACTION_MODES,
-                   help="surfaces (direct), residual (added to the PID, default) or setpoints (PID tracker offsets)")
+                   help="setpoints (PID tracker offsets, the default everywhere), residual (added to the PID) or surfaces (direct)")
     p.add_argument("--steps", type=bounded_int(1, MAX_TRAIN_STEPS), default=None,
                    help=f"total environment steps, 1..{MAX_TRAIN_STEPS:,} (sb3: agent decisions; rllib: formation "
                         "decisions); default: n_timesteps of the hyperparameters")

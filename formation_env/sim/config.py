@@ -212,7 +212,7 @@ class EnvConfig:
 
     scenario: object = "formation_keeping"  # a scenario name or a formation_env.scenarios.Scenario
     learning: str | tuple = "all"
-    action_mode: str = "surfaces"
+    action_mode: str = "setpoints"
     control_hz: float = 10.0
     wake: bool | None = None
     obs_mode: str = "flat"

@@ -19,7 +19,7 @@ def _sample_env_steps(runner, num_timesteps: int) -> int:
     return int(sum(ep.env_steps() for ep in runner.sample(num_timesteps=num_timesteps)))
 
 
-def benchmark_sampling(runner_counts=(1, 2), *, scenario: str = "formation_keeping", action_mode: str = "residual",
+def benchmark_sampling(runner_counts=(1, 2), *, scenario: str = "formation_keeping", action_mode: str = "setpoints",
                        rounds: int = 5, batch: int = 2000, num_envs_per_env_runner: int = 1,
                        num_cpus: int | None = None, address: str | None = None,
                        log: Callable[[str], None] = print) -> dict:

@@ -29,7 +29,7 @@ class RLlibTrainConfig:
     """Everything that defines an RLlib run (saved as ``config.yaml`` in the run directory)."""
 
     scenario: str
-    action_mode: str = "residual"
+    action_mode: str = "setpoints"
     seed: int = 0
     learning: str = "followers"
     policies: str = "shared"

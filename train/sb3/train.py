@@ -124,7 +124,7 @@ def steps_to_run(model, asked: int) -> tuple[int, str]:
         why = f"the {n_envs} env indices step together"
     return -(-asked // chunk) * chunk, why
 
-def train(*, scenario: str | None = None, algo: str | None = None, action_mode: str = "residual", seed: int = 0,
+def train(*, scenario: str | None = None, algo: str | None = None, action_mode: str = "setpoints", seed: int = 0,
           steps: int | None = None, config_file: str | Path | None = None, out_dir: str | Path | None = None,
           overwrite: bool = False, resume: bool = False, progress_bar: bool | None = None,
           overrides: dict | None = None, log: Callable[[str], None] | None = None, command: str | None = None) -> dict:
