@@ -9,6 +9,11 @@ Conventions used everywhere in formation-env:
 * ``dcm_ned_to_body(euler)`` is the thesis's DCM_be (Eq. 4.10): ``v_body = C @ v_ned``.
   Its transpose takes body vectors to NED.
 * Quaternions are scalar-first ``(e0, ex, ey, ez)`` and rotate body to NED.
+* Track frame: x forward along a ground track at angle chi from north (positive east), y to
+  starboard, z down (slot offsets, the slot frame, the turbulence field's u, v, w). It is the NED
+  frame turned by chi about the down axis: :func:`track_frame_offset_to_ned` /
+  :func:`ned_to_track_frame` (numpy) and the compiled scalar forms :func:`track_to_ned_xy` /
+  :func:`ned_to_track_xy` (the down component is the same in both frames).
 
 Every function accepts arrays with any number of leading (batch) axes.
 """
@@ -26,6 +31,10 @@ __all__ = [
     "dcm_body_to_ned_from_quaternion",
     "wind_axes_velocity_body",
     "quaternion_dcm_terms",
+    "track_frame_offset_to_ned",
+    "ned_to_track_frame",
+    "track_to_ned_xy",
+    "ned_to_track_xy",
 ]
 
 
@@ -128,3 +137,37 @@ def quaternion_dcm_terms(e0, ex, ey, ez):
     return (e0 * e0 + ex * ex - ey * ey - ez * ez, 2.0 * (ex * ey - e0 * ez), 2.0 * (ex * ez + e0 * ey),
             2.0 * (ex * ey + e0 * ez), e0 * e0 - ex * ex + ey * ey - ez * ez, 2.0 * (ey * ez - e0 * ex),
             2.0 * (ex * ez - e0 * ey), 2.0 * (ey * ez + e0 * ex), e0 * e0 - ex * ex - ey * ey + ez * ez)
+
+
+def track_frame_offset_to_ned(offset_track, track_angle_rad) -> np.ndarray:
+    """A slot offset (x forward along the track, y to starboard, z down; m) -> NED offset (m).
+    ``offset_track`` (..., 3), ``track_angle_rad`` broadcastable to its leading axes."""
+    off = np.asarray(offset_track, dtype=float)
+    chi = np.asarray(track_angle_rad, dtype=float)
+    c, s = np.cos(chi), np.sin(chi)
+    return np.stack([c * off[..., 0] - s * off[..., 1], s * off[..., 0] + c * off[..., 1], off[..., 2]], axis=-1)
+
+
+def ned_to_track_frame(vector_ned, track_angle_rad) -> np.ndarray:
+    """An NED vector (m or m/s) -> track frame (x forward along the track at ``track_angle_rad`` from north,
+    y to starboard, z down): the inverse of :func:`track_frame_offset_to_ned`."""
+    v = np.asarray(vector_ned, dtype=float)
+    chi = np.asarray(track_angle_rad, dtype=float)
+    c, s = np.cos(chi), np.sin(chi)
+    return np.stack([c * v[..., 0] + s * v[..., 1], -s * v[..., 0] + c * v[..., 1], v[..., 2]], axis=-1)
+
+
+@nb.njit(cache=True, inline="always")
+def track_to_ned_xy(c, s, dx, dy):
+    """Compiled scalar form of :func:`track_frame_offset_to_ned`, horizontal part: the (north, east)
+    components of a track-frame vector (dx along the track, dy to starboard) for a track at angle chi
+    with c = cos chi, s = sin chi. Returns ``(c dx - s dy, s dx + c dy)``."""
+    return c * dx - s * dy, s * dx + c * dy
+
+
+@nb.njit(cache=True, inline="always")
+def ned_to_track_xy(c, s, dn, de):
+    """Compiled scalar form of :func:`ned_to_track_frame`, horizontal part: the (along-track,
+    starboard) components of an NED vector (dn north, de east) for a track at angle chi with
+    c = cos chi, s = sin chi. Returns ``(c dn + s de, -s dn + c de)``."""
+    return c * dn + s * de, -s * dn + c * de

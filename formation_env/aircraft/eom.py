@@ -19,6 +19,7 @@ from ..atmosphere.wind import WindInput
 from .aerodynamics import aero_coefficients, aero_forces_moments, air_data
 from .mass import mass_properties
 from .params import AEROSONDE, AerosondeParams
+from .state import POS
 from .propulsion import engine, propeller
 from .state import FUEL, N_INTEGRATED, N_STATES, OMEGA, QUAT, as_state
 
@@ -309,5 +310,5 @@ def outputs(state, controls, wind: WindInput | None = None, params: AerosondePar
     out["state_dot"] = xdot
     out["euler"] = frames.euler_from_quaternion(s[:, QUAT])
     out["altitude"] = -s[:, 12]
-    out["velocity_ned"] = xdot[:, 10:13]
+    out["velocity_ned"] = xdot[:, POS]
     return out

@@ -126,8 +126,14 @@ def _atmos(alt, tT, tP, tR, tA):
 
 
 @_jit
-def _air(x, wind, v):
-    """Raw and clipped air data of one aircraft; wind = [wind_ned(3), turb_body(3), ell_ned(3), ell_rot(3)]."""
+def air_data_kernel(x, wind, v):
+    """Raw and clipped air data of one aircraft (compiled; the numpy form is :func:`.eom.air_data_of`).
+
+    x (16,) the state (:mod:`.state` layout: body velocity m/s, quaternion body to NED, ...);
+    wind (12,) = [ambient wind NED (3) m/s, turbulence body axes (3) m/s, ELL induced wind NED (3)
+    m/s, ELL rotational wind body (3) rad/s]; v (K_NPARAMS,) the packed scalars (:func:`pack`).
+    Returns the 15-tuple (airspeed m/s, alpha rad, beta rad as computed, the same three clipped to
+    the model's table bounds, then r00, r01, r02, r10, ..., r22 of the body-to-NED matrix)."""
     r00, r01, r02, r10, r11, r12, r20, r21, r22 = quaternion_dcm_terms(x[6], x[7], x[8], x[9])
     wn = wind[0] + wind[6]
     we = wind[1] + wind[7]
@@ -152,7 +158,7 @@ def _deriv(x, c, nctrl, wind, alphadot, v, pJ, pCT, pCP, eR, eM, eP, eF, tT, tP,
     de, da, dr, thr = c[0], c[1], c[2], c[3]
     df = c[4] if nctrl > 4 else 0.0
     (va_raw, alpha_raw, beta_raw, va, alpha, beta,
-     r00, r01, r02, r10, r11, r12, r20, r21, r22) = _air(x, wind, v)
+     r00, r01, r02, r10, r11, r12, r20, r21, r22) = air_data_kernel(x, wind, v)
     alt = -x[12]
     temp, pres, rho, sound = _atmos(alt, tT, tP, tR, tA)
     if v[K_GMODEL] == 0.0:
@@ -275,7 +281,7 @@ def rk4_batch(state, controls, wind, dt, v, pJ, pCT, pCP, eR, eM, eP, eF, tT, tP
         x = state[b]
         c = controls[b]
         wb = wind[b]
-        alpha_now = _air(x, wb, v)[1]
+        alpha_now = air_data_kernel(x, wb, v)[1]
         alphadot = (alpha_now - x[15]) / dt if v[K_ALPHADOT] != 0.0 else 0.0
         _deriv(x, c, nctrl, wb, alphadot, v, pJ, pCT, pCP, eR, eM, eP, eF, tT, tP, tR, tA, k1)
         for i in range(15):

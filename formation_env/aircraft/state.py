@@ -21,14 +21,15 @@ import numpy as np
 from .. import frames
 
 __all__ = [
-    "N_STATES", "N_INTEGRATED", "IDX", "VEL", "RATES", "QUAT", "POS", "FUEL", "OMEGA", "ALPHA_PREV",
-    "STATE_NAMES", "make_state", "euler_angles", "altitude", "as_state",
+    "N_STATES", "N_INTEGRATED", "IDX", "VEL", "RATES", "QUAT", "POS", "POS_N", "POS_E", "POS_D", "FUEL", "OMEGA",
+    "ALPHA_PREV", "STATE_NAMES", "make_state", "euler_angles", "altitude", "as_state",
 ]
 
 VEL = slice(0, 3)
 RATES = slice(3, 6)
 QUAT = slice(6, 10)
 POS = slice(10, 13)
+POS_N, POS_E, POS_D = 10, 11, 12  # the columns of POS, for compiled code (numba indexes by integer constants)
 FUEL = 13
 OMEGA = 14
 ALPHA_PREV = 15

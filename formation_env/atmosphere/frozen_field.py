@@ -56,12 +56,12 @@ from typing import Sequence
 import numpy as np
 
 from .frozen_field_correlation import dryden_correlation, frozen_field_theory, isotropic_correlation
-from .frozen_field_filters import (FrozenFieldParams, FrozenFieldState, _advance_one, advance_kernel,  # noqa: F401
+from .frozen_field_filters import (FrozenFieldParams, FrozenFieldState, advance_field_one, advance_kernel,
                                    frozen_field_params, reset_kernel)
 from .frozen_field_rng import N_STREAMS_PER_LANE, counter_bits, counter_normal_pair, formation_key
-from .frozen_field_sampling import _sample_one, rollout_kernel, sample_kernel  # noqa: F401
+from .frozen_field_sampling import rollout_kernel, sample_field_one, sample_kernel
 
-# _advance_one and _sample_one (one formation's filter step and read) are re-exported here for compiled
+# advance_field_one and sample_field_one (one formation's filter step and read) are for compiled
 # callers that fuse the field into their own loops.
 
 __all__ = [
@@ -80,6 +80,8 @@ __all__ = [
     "frozen_field_theory",
     "isotropic_correlation",
     "advance_kernel",
+    "advance_field_one",
+    "sample_field_one",
     "counter_bits",
     "counter_normal_pair",
     "reset_kernel",

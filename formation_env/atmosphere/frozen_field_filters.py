@@ -17,7 +17,8 @@ import numpy as np
 from .dryden import _first_order, _second_order
 from .frozen_field_rng import N_STREAMS_PER_LANE, _lane_normals
 
-__all__ = ["FrozenFieldParams", "FrozenFieldState", "frozen_field_params", "advance_kernel", "reset_kernel"]
+__all__ = ["FrozenFieldParams", "FrozenFieldState", "frozen_field_params", "advance_kernel", "advance_field_one",
+           "reset_kernel"]
 
 _jit = nb.njit(cache=True, error_model="numpy")
 
@@ -92,13 +93,19 @@ def frozen_field_params(sigma_mps, length_scale_m, airspeed_mps: float, dt_s: fl
     p0 = np.empty((2, 2, 2))
     for k in range(2):
         ad[k], gd[k], c[k], p0[k] = _second_order(length[k + 1] / airspeed, dt)
-    return FrozenFieldParams(sigma, length, airspeed, dt, buffer_steps, airspeed * dt, float(a_u),
-                             float(g_u), ad, gd, c, p0)
+    return FrozenFieldParams(sigma_mps=sigma, length_scale_m=length, airspeed_mps=airspeed, dt_s=dt,
+                             buffer_steps=buffer_steps, step_length_m=airspeed * dt, a_u=float(a_u), g_u=float(g_u),
+                             ad_vw=ad, gd_vw=gd, c_vw=c, p0_vw=p0)
 
 
 @_jit
-def _advance_one(params, state, b, n):
-    """One filter step of formation b; writes the new lane values to the next ring slot."""
+def advance_field_one(params, state, b, n):
+    """One filter step (dt) of formation b's lanes, in place: every lane's unit-variance Dryden
+    filter advanced with the counter-based normals of the formation's key, the new lane values
+    written to the next ring slot (which becomes the head). ``params`` a :class:`FrozenFieldParams`,
+    ``state`` a :class:`FrozenFieldState` (B formations of V aircraft), b the formation, n a scratch
+    float64 array of N_STREAMS_PER_LANE normals. For compiled callers that fuse the field into
+    their own per-formation loops (:func:`advance_kernel` is the batch form)."""
     nveh = state.x_u.shape[1]
     nslot = state.ring.shape[1]
     counter = state.step[b]
@@ -152,7 +159,7 @@ def reset_kernel(params, state, indices, keys):
         state.head[b] = 0
         state.step[b] = 1
         for _ in range(nslot - 1):
-            _advance_one(params, state, b, n)
+            advance_field_one(params, state, b, n)
 
 
 @_jit
@@ -160,4 +167,4 @@ def advance_kernel(params, state):
     """Every formation one dt forward."""
     n = np.empty(N_STREAMS_PER_LANE)
     for b in range(state.x_u.shape[0]):
-        _advance_one(params, state, b, n)
+        advance_field_one(params, state, b, n)

@@ -11,9 +11,10 @@ import math
 import numba as nb
 import numpy as np
 
+from ..frames import ned_to_track_xy, track_to_ned_xy
 from .frozen_field_filters import advance_kernel
 
-__all__ = ["sample_kernel", "rollout_kernel"]
+__all__ = ["sample_kernel", "sample_field_one", "rollout_kernel"]
 
 _jit = nb.njit(cache=True, error_model="numpy")
 
@@ -53,8 +54,15 @@ def _cholesky_rows(c, lo):
 
 
 @_jit
-def _sample_one(params, state, b, positions, chi, out, along, cross, down, slot0, slot1, frac,
-                corr, lo, gust):
+def sample_field_one(params, state, b, positions, chi, out, along, cross, down, slot0, slot1, frac,
+                     corr, lo, gust):
+    """Gusts of formation b at the current time into ``out[b]`` (V, 3) m/s NED: each aircraft reads
+    the lanes delayed by its transport delay, mixed by the Cholesky factor of the correlation of the
+    aircraft's cross-track and vertical separations, rotated from the track frame (u along, v
+    starboard, w down) to NED. positions (B, V, 3) m NED (row b read), chi the track angle rad
+    (0 north, positive east); along, cross, down, frac (V,) float64, slot0, slot1 (V,) int64,
+    corr, lo (V, V), gust (V, 3): scratch. No checks. For compiled callers that fuse the field into
+    their own per-formation loops (:func:`sample_kernel` is the batch form)."""
     nveh = state.x_u.shape[1]
     nslot = state.ring.shape[1]
     head = state.head[b]
@@ -64,8 +72,7 @@ def _sample_one(params, state, b, positions, chi, out, along, cross, down, slot0
     for i in range(nveh):
         pn = positions[b, i, 0]
         pe = positions[b, i, 1]
-        along[i] = cs * pn + sn * pe
-        cross[i] = -sn * pn + cs * pe
+        along[i], cross[i] = ned_to_track_xy(cs, sn, pn, pe)
         down[i] = positions[b, i, 2]
         if along[i] > front:
             front = along[i]
@@ -121,8 +128,7 @@ def _sample_one(params, state, b, positions, chi, out, along, cross, down, slot0
     for i in range(nveh):
         u = gust[i, 0]
         v = gust[i, 1]
-        out[b, i, 0] = cs * u - sn * v
-        out[b, i, 1] = sn * u + cs * v
+        out[b, i, 0], out[b, i, 1] = track_to_ned_xy(cs, sn, u, v)
         out[b, i, 2] = gust[i, 2]
 
 
@@ -141,7 +147,7 @@ def sample_kernel(params, state, positions_ned, track_angle_rad, out_gust_ned):
     lo = np.empty((nveh, nveh))
     gust = np.empty((nveh, 3))
     for b in range(state.x_u.shape[0]):
-        _sample_one(params, state, b, positions_ned, track_angle_rad[b], out_gust_ned, along, cross,
+        sample_field_one(params, state, b, positions_ned, track_angle_rad[b], out_gust_ned, along, cross,
                     down, slot0, slot1, frac, corr, lo, gust)
 
 

@@ -78,17 +78,22 @@ def fcs_params(config, dt_s: float) -> FCSParams:
     s, a, p, t, st = config.sas, config.attitude, config.autopilot, config.tracker, config.structure
     te, ta, tr, tt = config.trim_controls
     return FCSParams(
-        float(s.K_q_elevator), float(s.K_theta_elevator), float(s.K_r_rudder), float(s.T_r_washout_s),
-        float(s.K_phi_aileron), float(s.K_aileron_rudder_interlink),
-        float(a.Kp_theta), float(a.Ki_theta), float(a.Kp_phi), float(a.Ki_phi),
-        float(p.Kp_altitude), float(p.Ki_altitude), float(p.Kd_altitude), float(p.Kp_heading), float(p.Ki_heading),
-        float(p.Kp_speed), float(p.Ki_speed),
-        float(t.Kp_offtrack), float(t.Ki_offtrack), float(t.Kd_offtrack), float(t.Kp_alongtrack),
-        float(t.velocity_demand_limit_mps), float(t.track_angle_demand_limit_rad),
-        float(te), float(ta), float(tr), float(tt), float(config.trim_theta_rad), float(config.surface_limit_rad),
-        float(config.throttle_limits[0]), float(config.throttle_limits[1]), float(dt_s),
-        bool(config.use_tracker), bool(config.anti_windup), st.interlink_source == "demand",
-        st.washout == "time_constant", st.direction_feedback == "heading", st.interlink_path == "yaw_damper")
+        K_q_elevator=float(s.K_q_elevator), K_theta_elevator=float(s.K_theta_elevator),
+        K_r_rudder=float(s.K_r_rudder), T_r_washout_s=float(s.T_r_washout_s), K_phi_aileron=float(s.K_phi_aileron),
+        K_aileron_rudder_interlink=float(s.K_aileron_rudder_interlink),
+        Kp_theta=float(a.Kp_theta), Ki_theta=float(a.Ki_theta), Kp_phi=float(a.Kp_phi), Ki_phi=float(a.Ki_phi),
+        Kp_altitude=float(p.Kp_altitude), Ki_altitude=float(p.Ki_altitude), Kd_altitude=float(p.Kd_altitude),
+        Kp_heading=float(p.Kp_heading), Ki_heading=float(p.Ki_heading),
+        Kp_speed=float(p.Kp_speed), Ki_speed=float(p.Ki_speed),
+        Kp_offtrack=float(t.Kp_offtrack), Ki_offtrack=float(t.Ki_offtrack), Kd_offtrack=float(t.Kd_offtrack),
+        Kp_alongtrack=float(t.Kp_alongtrack), velocity_demand_limit_mps=float(t.velocity_demand_limit_mps),
+        track_angle_demand_limit_rad=float(t.track_angle_demand_limit_rad),
+        trim_elevator=float(te), trim_aileron=float(ta), trim_rudder=float(tr), trim_throttle=float(tt),
+        trim_theta_rad=float(config.trim_theta_rad), surface_limit_rad=float(config.surface_limit_rad),
+        throttle_min=float(config.throttle_limits[0]), throttle_max=float(config.throttle_limits[1]),
+        dt_s=float(dt_s), use_tracker=bool(config.use_tracker), anti_windup=bool(config.anti_windup),
+        interlink_from_demand=st.interlink_source == "demand", washout_time_constant=st.washout == "time_constant",
+        feedback_heading=st.direction_feedback == "heading", interlink_in_yaw_damper=st.interlink_path == "yaw_damper")
 
 
 @_jit

@@ -25,6 +25,7 @@ from __future__ import annotations
 import numpy as np
 
 from formation_env import frames
+from formation_env.frames import ned_to_track_frame, track_frame_offset_to_ned  # re-exported (the home is frames)
 from formation_env.aircraft.eom import air_data_of
 from formation_env.aircraft.state import N_STATES, POS, QUAT, VEL
 from formation_env.atmosphere.wind import WindInput
@@ -86,23 +87,6 @@ def fcs_observation(state, position_demand_ned, velocity_demand_ned, wind: WindI
     airspeed = air_data_of(s, wind)["airspeed_raw"]
     return observation_from_arrays(s[:, POS], vel_ned, frames.euler_from_quaternion(s[:, QUAT]), s[:, 3:6],
                                    airspeed, position_demand_ned, velocity_demand_ned)
-
-
-def track_frame_offset_to_ned(offset_track, track_angle_rad) -> np.ndarray:
-    """A slot offset (x forward along the track, y to starboard, z down; m) -> NED offset (m)."""
-    off = np.asarray(offset_track, dtype=float)
-    chi = np.asarray(track_angle_rad, dtype=float)
-    c, s = np.cos(chi), np.sin(chi)
-    return np.stack([c * off[..., 0] - s * off[..., 1], s * off[..., 0] + c * off[..., 1], off[..., 2]], axis=-1)
-
-
-def ned_to_track_frame(vector_ned, track_angle_rad) -> np.ndarray:
-    """An NED vector (m or m/s) -> track frame (x forward along the track at ``track_angle_rad`` from north,
-    y to starboard, z down): the inverse of :func:`track_frame_offset_to_ned`."""
-    v = np.asarray(vector_ned, dtype=float)
-    chi = np.asarray(track_angle_rad, dtype=float)
-    c, s = np.cos(chi), np.sin(chi)
-    return np.stack([c * v[..., 0] + s * v[..., 1], -s * v[..., 0] + c * v[..., 1], v[..., 2]], axis=-1)
 
 
 def slot_demand(leader_position_ned, leader_velocity_ned, slot_offset_track, slot_rate_track=None,

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import math
 
+from ..constants import AEROSONDE_SPAN_M
 from .surface import LiftingSurface, Vehicle
 
 __all__ = ["verification_wing", "delta_wing", "aerosonde", "AEROSONDE_TAIL_ARM_M", "PRESETS"]
@@ -40,7 +41,7 @@ def aerosonde(nseg: int = 10, tailplane: bool = False, tail_arm_m: float = AEROS
     poses are given at that point.
     """
     wing = LiftingSurface.from_degrees(
-        span_m=2.9, aspect_ratio=15.0, taper=0.4, sweep_deg=4.0, dihedral_deg=3.0,
+        span_m=AEROSONDE_SPAN_M, aspect_ratio=15.0, taper=0.4, sweep_deg=4.0, dihedral_deg=3.0,
         nseg=nseg, spacing=spacing, name="wing",
     )
     surfaces = [wing]

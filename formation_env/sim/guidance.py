@@ -14,6 +14,8 @@ import math
 
 import numba as nb
 
+from ..aircraft.state import POS_D, POS_E, POS_N
+from ..frames import track_to_ned_xy
 from .observe import signed_log
 from .params import ACCEL_MPS2, CLIMB_RATE_MPS, TURN_RATE_RAD_S
 
@@ -93,11 +95,13 @@ def formation_demands(sc, t, x, vel_ned, ref_pos, manoeuvre, jitter, out_pd, out
         slot_offset_and_rate(sc, j, t, off, rate)
         ox, oy, oz = off[0] + jitter[j, 0], off[1] + jitter[j, 1], off[2] + jitter[j, 2]
         r0, r1, r2 = rate[0], rate[1], rate[2]
-        out_pd[j, 0] = x[0, 10] + (c * ox - s * oy)
-        out_pd[j, 1] = x[0, 11] + (s * ox + c * oy)
-        out_pd[j, 2] = x[0, 12] + oz
-        out_vd[j, 0] = vel_ned[0, 0] + (c * r0 - s * r1)
-        out_vd[j, 1] = vel_ned[0, 1] + (s * r0 + c * r1)
+        pn, pe = track_to_ned_xy(c, s, ox, oy)
+        out_pd[j, 0] = x[0, POS_N] + pn
+        out_pd[j, 1] = x[0, POS_E] + pe
+        out_pd[j, 2] = x[0, POS_D] + oz
+        vn, ve = track_to_ned_xy(c, s, r0, r1)
+        out_vd[j, 0] = vel_ned[0, 0] + vn
+        out_vd[j, 1] = vel_ned[0, 1] + ve
         out_vd[j, 2] = vel_ned[0, 2] + r2
 
 

@@ -6,7 +6,9 @@ It fuses the same compiled kernels the wake and aircraft packages use
 so there is no second implementation of the physics; only the envelope check is repeated here,
 and a test holds it equal to :func:`formation_env.aircraft.check_envelope`. The separations the
 decision step judges collisions by (never NaN, also across a step that diverges a UAV) are here too
-(:func:`step_separation`, :func:`separation_each_known`).
+(:func:`step_separation`, :func:`separation_each_known`), and the observation's and reward's
+nearest-neighbour distance (:func:`min_separation_each`): every CG distance of the compiled code is
+:func:`pair_distance`.
 """
 
 from __future__ import annotations
@@ -16,7 +18,8 @@ import math
 import numba as nb
 import numpy as np
 
-from ..aircraft.kernels import _air, rk4_batch
+from ..aircraft.kernels import air_data_kernel, rk4_batch
+from ..aircraft.state import POS_D, POS_E, POS_N
 from ..frames import quaternion_dcm_terms
 from ..wake.arrays import evaluate_formation
 
@@ -41,12 +44,12 @@ def envelope_status(x, wind12, v, lim):
         if not math.isfinite(x[i]):
             return _NON_FINITE
     status = 0
-    va = _air(x, wind12, v)[0]
+    va = air_data_kernel(x, wind12, v)[0]
     if va < lim[0]:
         status |= _AS_LOW
     if va > lim[1]:
         status |= _AS_HIGH
-    alt = -x[12]
+    alt = -x[POS_D]
     if alt < lim[2]:
         status |= _ALT_LOW
     if alt > lim[3]:
@@ -75,7 +78,7 @@ def ell_inputs(state, ambient, wing_origin_b, pos, euler, speed, alpha, beta):
         (r[0, 0], r[0, 1], r[0, 2], r[1, 0], r[1, 1], r[1, 2],
          r[2, 0], r[2, 1], r[2, 2]) = quaternion_dcm_terms(e0, ex, ey, ez)
         for i in range(3):
-            pos[a, i] = x[10 + i] + r[i, 0] * wing_origin_b[0] + r[i, 1] * wing_origin_b[1] + r[i, 2] * wing_origin_b[2]
+            pos[a, i] = x[POS_N + i] + r[i, 0] * wing_origin_b[0] + r[i, 1] * wing_origin_b[1] + r[i, 2] * wing_origin_b[2]
         vb = np.empty(3)
         for i in range(3):  # air-relative velocity in body axes: u_b - R^T w_ned
             vb[i] = x[i] - (r[0, i] * ambient[a, 0] + r[1, i] * ambient[a, 1] + r[2, i] * ambient[a, 2])
@@ -168,23 +171,45 @@ def step_range(state, controls, ambient, turb, held_wind, held_omega, gamma, upd
 
 
 @_jit
+def pair_distance(p, i, j, k):
+    """Distance between rows i and j of the positions p, columns k..k+2 (k = POS_N for aircraft states
+    (V, 16), 0 for (V, 3) positions): the CG separation, m (NaN if either is non-finite)."""
+    return math.sqrt((p[i, k] - p[j, k]) ** 2 + (p[i, k + 1] - p[j, k + 1]) ** 2 + (p[i, k + 2] - p[j, k + 2]) ** 2)
+
+
+@_jit
 def min_separation(state):
-    """Smallest CG distance between any two aircraft of one formation (inf for one aircraft)."""
+    """Smallest CG distance between any two aircraft of one formation (inf for one aircraft; NaN if a
+    position is non-finite)."""
     best = np.inf
     nv = state.shape[0]
     for i in range(nv):
         for j in range(i + 1, nv):
-            d = math.sqrt((state[i, 10] - state[j, 10]) ** 2 + (state[i, 11] - state[j, 11]) ** 2
-                          + (state[i, 12] - state[j, 12]) ** 2)
+            d = pair_distance(state, i, j, POS_N)
             if d < best or d != d:
                 best = d
     return best
 
 
 @_jit
+def min_separation_each(x, out):
+    """(V,) distance from each UAV's CG to its nearest neighbour, state x (V, 16) (inf alone; NaN if
+    non-finite: :func:`separation_each_known` then gives the distances at the last finite positions)."""
+    nv = x.shape[0]
+    for i in range(nv):
+        best = np.inf
+        for j in range(nv):
+            if j != i:
+                d = pair_distance(x, i, j, POS_N)
+                if d < best or d != d:
+                    best = d
+        out[i] = best
+
+
+@_jit
 def position_finite(x, a):
     """Whether aircraft a's CG position (state x (V, 16)) is finite."""
-    return math.isfinite(x[a, 10]) and math.isfinite(x[a, 11]) and math.isfinite(x[a, 12])
+    return math.isfinite(x[a, POS_N]) and math.isfinite(x[a, POS_E]) and math.isfinite(x[a, POS_D])
 
 
 @_jit
@@ -200,12 +225,11 @@ def step_separation(pre, pre_vel, post, dt):
     for i in range(nv):
         for j in range(i + 1, nv):
             if position_finite(post, i) and position_finite(post, j):
-                d = math.sqrt((post[i, 10] - post[j, 10]) ** 2 + (post[i, 11] - post[j, 11]) ** 2
-                              + (post[i, 12] - post[j, 12]) ** 2)
+                d = pair_distance(post, i, j, POS_N)
             elif position_finite(pre, i) and position_finite(pre, j):
-                dx = pre[i, 10] - pre[j, 10]
-                dy = pre[i, 11] - pre[j, 11]
-                dz = pre[i, 12] - pre[j, 12]
+                dx = pre[i, POS_N] - pre[j, POS_N]
+                dy = pre[i, POS_E] - pre[j, POS_E]
+                dz = pre[i, POS_D] - pre[j, POS_D]
                 vx = pre_vel[i, 0] - pre_vel[j, 0]
                 vy = pre_vel[i, 1] - pre_vel[j, 1]
                 vz = pre_vel[i, 2] - pre_vel[j, 2]
@@ -231,8 +255,7 @@ def separation_each_known(last, known, out):
         if known[i]:
             for j in range(nv):
                 if j != i and known[j]:
-                    d = math.sqrt((last[i, 0] - last[j, 0]) ** 2 + (last[i, 1] - last[j, 1]) ** 2
-                                  + (last[i, 2] - last[j, 2]) ** 2)
+                    d = pair_distance(last, i, j, 0)
                     if d < best:
                         best = d
         out[i] = best

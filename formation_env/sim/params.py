@@ -1,6 +1,6 @@
 """Named parameter structs of the batched decision step (NamedTuples of scalars and arrays that
 numba compiles against): what never changes during a run. Built once per environment from an
-:class:`~formation_env.envs.config.EnvConfig` by :class:`formation_env.envs.engine.FormationEpisode`.
+:class:`~formation_env.sim.config.EnvConfig` by :class:`formation_env.sim.Simulation`.
 
 Shapes: V vehicles, K slot keyframes (padded), G scenario gusts, N lattice panels. Units SI,
 angles rad, frames NED (earth) and body (x forward, y starboard, z down).
@@ -18,19 +18,19 @@ from ..aircraft.envelope import DEFAULT_LIMITS
 from ..aircraft.kernels import pack as pack_aircraft
 from ..atmosphere.dryden import DrydenConfig
 from ..atmosphere.frozen_field import FrozenFieldParams, frozen_field_params
+from ..constants import AEROSONDE_SPAN_M, RESIDUAL_SCALE, SETPOINT_POSITION_SCALE_M, SETPOINT_SPEED_SCALE_MPS
 from ..control.law import FCSParams
 from ..wake.arrays import WakeArrays, wake_arrays
 from .kernels import pack_limits
 
 __all__ = ["AircraftArrays", "WakeArrays", "ScenarioArrays", "ActionParams", "RewardParams", "StepParams",
            "ACTION_MODE_CODES", "wake_arrays", "scenario_arrays", "SURFACES", "RESIDUAL", "SETPOINTS", "safe_box_arrays",
-           "setpoint_ranges", "setpoint_speed_range", "slot_error_axes"]
+           "setpoint_ranges", "setpoint_speed_range", "slot_error_axes", "surface_scale", "RESIDUAL_SCALE",
+           "SETPOINT_POSITION_SCALE_M", "SETPOINT_SPEED_SCALE_MPS"]
 
 SURFACES, RESIDUAL, SETPOINTS = 0, 1, 2
 ACTION_MODE_CODES = {"surfaces": SURFACES, "residual": RESIDUAL, "setpoints": SETPOINTS}
-RESIDUAL_SCALE = (0.1, 0.1, 0.1, 0.2)  # rad, rad, rad, throttle fraction per unit action
-SETPOINT_POSITION_SCALE_M = 5.0  # m per unit action, slot frame (along, starboard, down)
-SETPOINT_SPEED_SCALE_MPS = 2.0  # m/s per unit action along the demanded track
+# RESIDUAL_SCALE, SETPOINT_POSITION_SCALE_M, SETPOINT_SPEED_SCALE_MPS: formation_env.constants (re-exported here)
 # Leader manoeuvre rates of the randomised reference path: turn 3 deg/s, climb 1.5 m/s, 0.5 m/s^2.
 TURN_RATE_RAD_S = math.radians(3.0)
 CLIMB_RATE_MPS = 1.5
@@ -82,6 +82,24 @@ class ActionParams(NamedTuple):
     command_min: np.ndarray  # (4,)
     command_max: np.ndarray  # (4,)
 
+    @classmethod
+    def from_config(cls, action_mode: str, agent_mask, trim_controls, surface_limit_rad: float, throttle_limits,
+                    scenario) -> "ActionParams":
+        """The action mapping of an environment: ``action_mode`` a key of :data:`ACTION_MODE_CODES`;
+        ``agent_mask`` (V,) bool (copied); ``trim_controls`` the trim's elevator, aileron, rudder rad and
+        throttle (the first 4 values); ``surface_limit_rad`` the FCS surface limit, rad;
+        ``throttle_limits`` (min, max); ``scenario`` a :class:`~formation_env.scenarios.Scenario` (the
+        set-point ranges, :func:`setpoint_ranges` and :func:`setpoint_speed_range`)."""
+        lim = float(surface_limit_rad)
+        throttle_min, throttle_max = (float(x) for x in throttle_limits)
+        low, high = setpoint_ranges(scenario)
+        return cls(mode=ACTION_MODE_CODES[action_mode], agent_mask=np.array(agent_mask, dtype=bool),
+                   trim_controls=np.ascontiguousarray(np.asarray(trim_controls, dtype=float).reshape(-1)[:4]),
+                   surface_scale=surface_scale(lim), residual_scale=np.asarray(RESIDUAL_SCALE, float),
+                   setpoint_low_m=low, setpoint_high_m=high, setpoint_speed_mps=setpoint_speed_range(scenario),
+                   command_min=np.array([-lim, -lim, -lim, throttle_min]),
+                   command_max=np.array([lim, lim, lim, throttle_max]))
+
 
 class RewardParams(NamedTuple):
     """:class:`~formation_env.envs.config.RewardWeights` plus the distances it needs."""
@@ -105,6 +123,22 @@ class RewardParams(NamedTuple):
     box_high_m: np.ndarray  # (V, 3) upper corners, m (+inf: unbounded)
     slot_error_axes: np.ndarray  # (3,) weights of the slot error's slot-frame components (along, starboard, down)
 
+    @classmethod
+    def from_config(cls, weights, scenario, collision_separation_b: float) -> "RewardParams":
+        """The reward of an environment: ``weights`` a :class:`~formation_env.envs.config.RewardWeights`
+        (its distances in spans are converted to m with :data:`AEROSONDE_SPAN_M`), ``scenario`` a
+        :class:`~formation_env.scenarios.Scenario` (the safe box, :func:`safe_box_arrays`, and the slot
+        error's axes, :func:`slot_error_axes`), ``collision_separation_b`` the collision separation,
+        spans."""
+        w, span = weights, AEROSONDE_SPAN_M
+        box_low, box_high = safe_box_arrays(scenario)
+        return cls(slot=w.slot, slot_scale_m=w.slot_scale_m, effort=w.effort, rate=w.rate, benefit=w.benefit,
+                   progress=w.progress, shaping_gamma=w.shaping_gamma, terminal_forfeit=w.terminal_forfeit,
+                   separation=w.separation, barrier_separation_m=w.barrier_separation_b * span,
+                   collision=w.collision, crash=w.crash, collision_separation_m=collision_separation_b * span,
+                   box=w.box, box_scale_m=w.box_scale_b * span, box_low_m=box_low, box_high_m=box_high,
+                   slot_error_axes=slot_error_axes(scenario))
+
 
 class StepParams(NamedTuple):
     """Everything constant of one environment (B formations share it)."""
@@ -127,8 +161,19 @@ class StepParams(NamedTuple):
     trim_airspeed_mps: float
 
 
+def surface_scale(limit_rad: float) -> np.ndarray:
+    """Surfaces-mode scale per unit action: the FCS surface limit (rad) for the three surfaces,
+    0.5 for the throttle."""
+    return np.array([limit_rad, limit_rad, limit_rad, 0.5])
+
+
 def aircraft_arrays(params=AEROSONDE, options=DEFAULT_OPTIONS, limits=DEFAULT_LIMITS) -> AircraftArrays:
-    return AircraftArrays(*pack_aircraft(params, options), pack_limits(limits))
+    """The Aerosonde ``params`` with ``options`` packed for the kernels, and its flight envelope."""
+    (scalars, prop_j, prop_ct, prop_cp, engine_rpm, engine_map, engine_power, engine_fuel,
+     atm_t, atm_p, atm_rho, atm_a) = pack_aircraft(params, options)
+    return AircraftArrays(scalars=scalars, prop_J=prop_j, prop_CT=prop_ct, prop_CP=prop_cp, engine_rpm=engine_rpm,
+                          engine_map=engine_map, engine_power=engine_power, engine_fuel=engine_fuel, atm_T=atm_t,
+                          atm_P=atm_p, atm_rho=atm_rho, atm_a=atm_a, limits=pack_limits(limits))
 
 
 def scenario_arrays(sc, manoeuvres: bool) -> ScenarioArrays:
@@ -137,7 +182,7 @@ def scenario_arrays(sc, manoeuvres: bool) -> ScenarioArrays:
     times = np.full((v, k), np.inf)
     offs = np.zeros((v, k, 3))
     count = np.zeros(v, dtype=np.int64)
-    span = sc.slots[0].span_m if sc.slots else 2.9
+    span = sc.slots[0].span_m if sc.slots else AEROSONDE_SPAN_M
     for j, slot in enumerate(sc.slots):
         kf = slot.keyframes
         count[j + 1] = len(kf)
@@ -145,8 +190,11 @@ def scenario_arrays(sc, manoeuvres: bool) -> ScenarioArrays:
             times[j + 1, m] = t
             offs[j + 1, m] = np.asarray(off) * slot.span_m
     gusts = np.array([[*g.amplitude_ned, g.start_s, g.rise_s, g.hold_s, g.decay_s] for g in sc.gusts]).reshape(-1, 7)
-    return ScenarioArrays(float(sc.airspeed_mps), float(sc.altitude_m), np.asarray(sc.reference_offset_ned, float),
-                          times, offs, count, float(span), sc.slot_frame == "leader_demand", gusts, bool(manoeuvres))
+    return ScenarioArrays(airspeed_mps=float(sc.airspeed_mps), altitude_m=float(sc.altitude_m),
+                          reference_offset_ned=np.asarray(sc.reference_offset_ned, float), slot_times_s=times,
+                          slot_offsets_m=offs, slot_keyframes=count, span_m=float(span),
+                          slot_along_leader_demand=sc.slot_frame == "leader_demand", gusts=gusts,
+                          manoeuvres=bool(manoeuvres))
 
 
 def safe_box_arrays(sc) -> tuple[np.ndarray, np.ndarray]:

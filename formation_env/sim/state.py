@@ -61,24 +61,36 @@ class StepOutput(NamedTuple):
 
 
 def init_state(batch_size: int, n_vehicles: int, n_panels: int, field_params) -> SimState:
+    """Zeroed state of ``batch_size`` formations of ``n_vehicles`` UAVs (``n_panels`` ELL panels in all,
+    the turbulence field of ``field_params``); a reset fills it."""
     b, v = batch_size, n_vehicles
     z3 = lambda: np.zeros((b, v, 3))  # noqa: E731
-    return SimState(np.zeros((b, v, N_STATES)), np.zeros((b, v, N_CSTATE)), np.zeros((b, v, 4)),
-                    np.zeros(b, dtype=np.int64), z3(), z3(), np.zeros((b, max(n_panels, 1))), z3(), z3(), z3(),
-                    np.zeros((b, 3)), np.zeros((b, 4)), np.zeros((b, 3)), z3(), frozen_field_init(field_params, b, v),
-                    np.zeros((b, v), dtype=np.int64), np.zeros((b, v, 4)), np.zeros((b, v)), np.zeros((b, v)),
-                    np.zeros(b, dtype=np.int64))
+    return SimState(
+        aircraft=np.zeros((b, v, N_STATES)), controller=np.zeros((b, v, N_CSTATE)), command=np.zeros((b, v, 4)),
+        step=np.zeros(b, dtype=np.int64), induced_wind_ned=z3(), induced_omega_body=z3(),
+        circulation=np.zeros((b, max(n_panels, 1))), position_demand=z3(), velocity_demand=z3(), slot_jitter=z3(),
+        steady_wind=np.zeros((b, 3)), manoeuvre=np.zeros((b, 4)), reference_position=np.zeros((b, 3)), gust_ned=z3(),
+        field=frozen_field_init(field_params, b, v), status=np.zeros((b, v), dtype=np.int64),
+        previous_action=np.zeros((b, v, 4)), previous_error=np.zeros((b, v)), episode_return=np.zeros((b, v)),
+        episode_decisions=np.zeros(b, dtype=np.int64))
 
 
 def init_output(batch_size: int, n_vehicles: int, obs_size: int) -> StepOutput:
+    """Zeroed outputs of ``batch_size`` formations of ``n_vehicles`` UAVs (observations of ``obs_size``)."""
     b, v = batch_size, n_vehicles
-    return StepOutput(np.zeros((b, v, obs_size)), np.zeros((b, v)), np.zeros((b, v, len(REWARD_TERMS))),
-                      np.zeros(b, dtype=np.bool_), np.zeros(b, dtype=np.bool_), np.zeros(b, dtype=np.bool_),
-                      np.zeros((b, v), dtype=np.bool_), np.zeros((b, v)), np.zeros((b, v)), np.full(b, np.inf),
-                      np.zeros((b, v)), np.zeros((b, v)))
+    return StepOutput(
+        observation=np.zeros((b, v, obs_size)), reward=np.zeros((b, v)),
+        reward_terms=np.zeros((b, v, len(REWARD_TERMS))), terminated=np.zeros(b, dtype=np.bool_),
+        truncated=np.zeros(b, dtype=np.bool_), collided=np.zeros(b, dtype=np.bool_),
+        crashed=np.zeros((b, v), dtype=np.bool_), slot_error_m=np.zeros((b, v)), separation_m=np.zeros((b, v)),
+        min_separation_m=np.full(b, np.inf), saving=np.zeros((b, v)), box_depth_m=np.zeros((b, v)))
+
+
+def _copy_field(x):
+    return FrozenFieldState(**{name: a.copy() for name, a in x._asdict().items()}) if isinstance(x, FrozenFieldState) \
+        else x.copy()
 
 
 def copy_state(state: SimState) -> SimState:
     """A deep copy (the step updates its state in place, for speed)."""
-    return SimState(*[FrozenFieldState(*[a.copy() for a in x]) if isinstance(x, FrozenFieldState) else x.copy()
-                      for x in state])
+    return SimState(**{name: _copy_field(x) for name, x in state._asdict().items()})

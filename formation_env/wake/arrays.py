@@ -47,12 +47,16 @@ class WakeArrays(NamedTuple):
 def wake_arrays(model, wing_origin_body) -> WakeArrays:
     """The struct of ``model`` (a WakeModel) with the wing origin relative to the CG (body axes, m)."""
     t = model.template
-    return WakeArrays(t.knot_x1_b, t.knot_x3_b, t.knot_vehicle, t.knot_surface, t.surface_origin_b, t.surface_vehicle,
-                      t.surface_knot_start, t.surface_panel_start, t.surface_core_scale, t.panel_left_knot,
-                      t.panel_vehicle, t.control_b, t.normal_b, model.aic_static, model.eval_b, model.grad_w,
-                      t.vehicle_panel_start, float(t.cutoff_m), int(model._core_mode),
-                      int(model._core_mode if model.viscous_aic else CORE_NONE), float(model.kinematic_viscosity),
-                      float(model.overlap_core_m), np.ascontiguousarray(wing_origin_body, dtype=float), int(model.n_panels))
+    return WakeArrays(
+        knot_x1_b=t.knot_x1_b, knot_x3_b=t.knot_x3_b, knot_vehicle=t.knot_vehicle, knot_surface=t.knot_surface,
+        surface_origin_b=t.surface_origin_b, surface_vehicle=t.surface_vehicle,
+        surface_knot_start=t.surface_knot_start, surface_panel_start=t.surface_panel_start,
+        surface_core_scale=t.surface_core_scale, panel_left_knot=t.panel_left_knot, panel_vehicle=t.panel_vehicle,
+        control_b=t.control_b, normal_b=t.normal_b, aic_static=model.aic_static, eval_b=model.eval_b,
+        grad_w=model.grad_w, vehicle_panel_start=t.vehicle_panel_start, cutoff_m=float(t.cutoff_m),
+        core_mode=int(model.core_mode), aic_core_mode=int(model.core_mode if model.viscous_aic else CORE_NONE),
+        kinematic_viscosity=float(model.kinematic_viscosity), overlap_core_m=float(model.overlap_core_m),
+        wing_origin_body=np.ascontiguousarray(wing_origin_body, dtype=float), n_panels=int(model.n_panels))
 
 
 @nb.njit(cache=True, error_model="numpy")

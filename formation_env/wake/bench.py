@@ -7,6 +7,7 @@ import time
 
 import numpy as np
 
+from ..constants import AEROSONDE_SPAN_M
 from ..geometry import aerosonde
 from .model import WakeModel
 from .state import FormationState
@@ -19,7 +20,7 @@ THESIS_SECONDS_PER_EVALUATION = 0.072  # section 5.4.4, MATLAB on a Xeon E5410, 
 def aerosonde_pair_states(batch: int, seed: int = 0) -> FormationState:
     """B leader/follower Aerosonde pairs near the thesis's formation-keeping slot, jittered."""
     rng = np.random.default_rng(seed)
-    b = 2.9
+    b = AEROSONDE_SPAN_M
     pos = np.zeros((batch, 2, 3))
     pos[:, 1] = np.array([-2 * b, b, 0.3 * b]) + rng.normal(0.0, 0.1 * b, (batch, 3))
     euler = np.zeros((batch, 2, 3))

@@ -149,6 +149,12 @@ class WakeModel:
         return self.template.n_vehicles
 
     @property
+    def core_mode(self) -> int:
+        """The viscous-core law of the induced velocity as the kernels' integer code
+        (:data:`formation_env.wake.kernels` ``CORE_*``, from the ``core`` name); read-only."""
+        return self._core_mode
+
+    @property
     def n_panels(self) -> int:
         return self.template.n_panels
 
