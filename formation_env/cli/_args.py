@@ -12,7 +12,7 @@ __all__ = ["MAX_DURATION_S", "MAX_GIF_FRAMES", "MAX_EPISODES", "MAX_TRAIN_STEPS"
            "positive_int", "nonneg_int", "bounded_int", "finite_float", "check_out_path", "check_min_duration",
            "trained_scenario", "check_policy_scenario"]
 
-MAX_DURATION_S = 3600.0  # longest episode replay/run/evaluate fly (one hour of flight)
+from ..constants import MAX_DURATION_S  # noqa: E402  longest episode replay/run/evaluate fly
 MAX_GIF_FRAMES = 2000    # most frames of a replay GIF (formation_env.replay.animation.MAX_FRAMES)
 MAX_EPISODES = 10_000    # most evaluation episodes per policy (they run as one batch)
 MAX_TRAIN_STEPS = 10 ** 9  # most environment steps of one training run (--steps)

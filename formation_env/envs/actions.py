@@ -19,6 +19,6 @@ The scales live in :mod:`formation_env.sim.params` (``surface_scale``, ``RESIDUA
 
 from .config import ACTION_MODES
 from ..sim.params import RESIDUAL_SCALE, SETPOINT_POSITION_SCALE_M, SETPOINT_SPEED_SCALE_MPS
-from ..sim.simulation import surface_scale
+from ..sim.params import surface_scale
 
 __all__ = ["ACTION_MODES", "RESIDUAL_SCALE", "SETPOINT_POSITION_SCALE_M", "SETPOINT_SPEED_SCALE_MPS", "surface_scale"]

@@ -22,7 +22,7 @@ from ..frames import dcm_body_to_ned_from_quaternion, dcm_ned_to_body
 __all__ = ["SPAN_M", "LEG_LENGTH_M", "FormationGeometry", "formation_geometry", "geometry_from_state",
            "geometry_from_euler", "draw_formation", "draw_formation_3d", "vehicle_colour", "figure_to_rgb"]
 
-SPAN_M = 2.9  # Aerosonde span (Table 6.1)
+from ..constants import AEROSONDE_SPAN_M as SPAN_M  # noqa: E402  Aerosonde span (Table 6.1)
 LEG_LENGTH_M = 4 * SPAN_M  # drawn length of the trailing legs
 _FUSELAGE_M = (0.9, -1.2)  # nose and tail stations along body x, m (drawing only)
 

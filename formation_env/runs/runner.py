@@ -32,7 +32,7 @@ from ..scenarios import Scenario, get_scenario
 
 __all__ = ["ScenarioRun", "run_scenario", "scenario_metrics", "run_scenario_to_dir", "MAX_DURATION_S"]
 
-MAX_DURATION_S = 3600.0  # longest run a duration override may ask for (the histories are preallocated)
+from ..constants import AEROSONDE_SPAN_M, MAX_DURATION_S  # noqa: E402  (the histories are preallocated)
 
 
 @dataclass(frozen=True, eq=False)
@@ -210,7 +210,7 @@ def scenario_metrics(run: ScenarioRun) -> dict:
         iw = h["induced_wind_ned"]
         before, after = _window(run, 0.0, 10.0), _window(run, 52.0)
         m.update({
-            "min_separation_m": float(sep.min()), "min_separation_spans": float(sep.min() / 2.9),
+            "min_separation_m": float(sep.min()), "min_separation_spans": float(sep.min() / AEROSONDE_SPAN_M),
             "time_of_min_separation_s": float(run.time[int(np.argmin(sep))]),
             "level_in_north_at_s": None if cross.size == 0 else float(run.time[cross[0] + 1]),
             "final_relative_position_track_frame_m": [float(ahead[-1]), float(rel[-1, 1]), float(rel[-1, 2])],

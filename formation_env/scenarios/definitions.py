@@ -21,7 +21,7 @@ from ..atmosphere.gust import TransientGust, thesis_gust_20s, thesis_gust_40s
 __all__ = ["AEROSONDE_SPAN_M", "SlotSchedule", "Scenario", "SCENARIOS", "get_scenario", "scenario_names",
            "register_scenario"]
 
-AEROSONDE_SPAN_M = 2.9
+from ..constants import AEROSONDE_SPAN_M  # noqa: E402  (re-exported: the slot offsets' unit)
 
 
 @dataclass(frozen=True)

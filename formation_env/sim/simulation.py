@@ -40,9 +40,8 @@ from .config import EnvConfig
 from .formation import WakeConfig, wake_model_for, wing_origin_body
 from .infos import INFO_REWARD_KEYS, InfoArrays, finite_values, reward_info_key, separation_each
 from .observe import REWARD_TERMS, observation_size
-from .params import (ACTION_MODE_CODES, RESIDUAL_SCALE, ActionParams, RewardParams, StepParams, aircraft_arrays,
-                     safe_box_arrays, scenario_arrays, setpoint_ranges, setpoint_speed_range, slot_error_axes,
-                     turbulence_params, wake_arrays)
+from .params import (ActionParams, RewardParams, StepParams, aircraft_arrays, scenario_arrays, turbulence_params,
+                     wake_arrays)
 from .state import StepOutput, init_output, init_state
 from .step import observe, refresh, step
 from .warmup import ensure_warm
@@ -52,12 +51,6 @@ __all__ = ["Simulation", "SimOutput", "InfoArrays", "RESET_OPTIONS", "INFO_REWAR
 
 #: the options :meth:`Simulation.reset` takes (an unknown one is a ``TypeError``)
 RESET_OPTIONS = ("steady_wind_ned",)
-
-
-def surface_scale(limit_rad: float) -> np.ndarray:
-    """Surfaces-mode scale per unit action: the FCS surface limit (rad) for the three surfaces,
-    0.5 for the throttle."""
-    return np.array([limit_rad, limit_rad, limit_rad, 0.5])
 
 
 class SimOutput(NamedTuple):
@@ -154,26 +147,11 @@ class Simulation:
         return tuple(sorted(cfg.learning))
 
     def _action_params(self, config: EnvConfig) -> ActionParams:
-        lim, sc = self.surface_limit_rad, self.scenario
-        low, high = setpoint_ranges(sc)
-        return ActionParams(
-            mode=ACTION_MODE_CODES[config.action_mode], agent_mask=self.agent_mask.copy(),
-            trim_controls=np.ascontiguousarray(self.trim.controls[0, :4], float), surface_scale=surface_scale(lim),
-            residual_scale=np.asarray(RESIDUAL_SCALE, float), setpoint_low_m=low, setpoint_high_m=high,
-            setpoint_speed_mps=setpoint_speed_range(sc),
-            command_min=np.array([-lim, -lim, -lim, self.throttle_limits[0]]),
-            command_max=np.array([lim, lim, lim, self.throttle_limits[1]]))
+        return ActionParams.from_config(config.action_mode, self.agent_mask, self.trim.controls[0, :4],
+                                        self.surface_limit_rad, self.throttle_limits, self.scenario)
 
     def _reward_params(self, config: EnvConfig) -> RewardParams:
-        w, sc, span = config.reward, self.scenario, AEROSONDE_SPAN_M
-        box_low, box_high = safe_box_arrays(sc)
-        return RewardParams(
-            slot=w.slot, slot_scale_m=w.slot_scale_m, effort=w.effort, rate=w.rate, benefit=w.benefit,
-            progress=w.progress, shaping_gamma=w.shaping_gamma, terminal_forfeit=w.terminal_forfeit,
-            separation=w.separation, barrier_separation_m=w.barrier_separation_b * span, collision=w.collision,
-            crash=w.crash, collision_separation_m=config.collision_separation_b * span, box=w.box,
-            box_scale_m=w.box_scale_b * span, box_low_m=box_low, box_high_m=box_high,
-            slot_error_axes=slot_error_axes(sc))
+        return RewardParams.from_config(config.reward, self.scenario, config.collision_separation_b)
 
     # ------------------------------------------------------------------ API
     @property

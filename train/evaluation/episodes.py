@@ -13,7 +13,7 @@ from formation_env.tasks.wake_surfing.metrics import longest_run
 
 __all__ = ["eval_env_config", "run_episodes", "longest_run", "SPAN_M", "SUCCESS_WINDOW_S", "FAILURE_SLOT_ERROR_M"]
 
-SPAN_M = 2.9
+from formation_env.constants import AEROSONDE_SPAN_M as SPAN_M  # noqa: E402
 SUCCESS_WINDOW_S = 5.0
 #: the slot error (m) an episode that ended early is charged for each decision it did not fly: far beyond any
 #: error of an episode flown to the end (the thesis PID's worst RMS in turbulence is ~16 m), and the reward's own

@@ -70,7 +70,7 @@ __all__ = ["EvalPolicy", "load_policy", "run_episodes", "summarise", "evaluate",
            "selection_score", "markdown_table", "comparison_table", "groups_table"]
 
 MAX_EPISODES = 10_000                  # episodes per policy at most (they fly as one batch)
-MAX_DURATION_S = 3600.0                # longest episode a duration override may ask for, s
+from formation_env.constants import MAX_DURATION_S  # noqa: E402  longest episode a duration override may ask for
 TEST_EPISODES = 100                    # held-out test episodes per policy by default
 
 
