@@ -78,8 +78,9 @@ def _supersuit_vec_env_class():
     if _CLASS:
         return _CLASS[0]
     VecEnv = _vec_env_base()
+    from .vector import OneObjectVecEnvMethods  # imports stable-baselines3, optional: on first use
 
-    class SuperSuitVecEnv(VecEnv):
+    class SuperSuitVecEnv(OneObjectVecEnvMethods, VecEnv):
         """SB3 ``VecEnv`` over SuperSuit's (Gymnasium-style) ``ConcatVecEnv`` of Markov vector envs.
 
         Seeding: ``seed(s)`` (or ``seed=s`` at construction) makes the next ``reset()`` reset copy ``c`` with
@@ -140,16 +141,7 @@ def _supersuit_vec_env_class():
         def get_attr(self, attr_name, indices=None):
             if attr_name == "render_mode":
                 return [self._render_mode for _ in self._get_indices(indices)]
-            return [getattr(self, attr_name) for _ in self._get_indices(indices)]
-
-        def set_attr(self, attr_name, value, indices=None) -> None:
-            setattr(self, attr_name, value)
-
-        def env_method(self, method_name, *method_args, indices=None, **method_kwargs):
-            return [getattr(self, method_name)(*method_args, **method_kwargs) for _ in self._get_indices(indices)]
-
-        def env_is_wrapped(self, wrapper_class, indices=None):
-            return [False for _ in self._get_indices(indices)]
+            return super().get_attr(attr_name, indices)
 
         def get_images(self):
             frame = self.venv.render()

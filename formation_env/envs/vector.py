@@ -31,7 +31,7 @@ from .config import EnvConfig
 from .observations import OBS_CLIP
 from ..tasks import make_config
 
-__all__ = ["FormationVecEnv", "FormationVectorEnv", "BatchedFormations"]
+__all__ = ["FormationVecEnv", "FormationVectorEnv", "BatchedFormations", "OneObjectVecEnvMethods"]
 
 _RENDER_MODES = ("rgb_array",)
 
@@ -158,7 +158,24 @@ class BatchedFormations:
         return self.observations(), rewards.astype(np.float32), terminated, truncated, final_obs, np.repeat(done_f, rep)
 
 
-class FormationVecEnv(VecEnv):
+class OneObjectVecEnvMethods:
+    """SB3 ``VecEnv`` attribute access for a vector env that is one object (every env index shares it):
+    ``get_attr`` / ``set_attr`` / ``env_method`` act on that object, once per requested index."""
+
+    def get_attr(self, attr_name, indices=None):
+        return [getattr(self, attr_name) for _ in self._get_indices(indices)]
+
+    def set_attr(self, attr_name, value, indices=None) -> None:
+        setattr(self, attr_name, value)
+
+    def env_method(self, method_name, *method_args, indices=None, **method_kwargs):
+        return [getattr(self, method_name)(*method_args, **method_kwargs) for _ in self._get_indices(indices)]
+
+    def env_is_wrapped(self, wrapper_class, indices=None):
+        return [False for _ in self._get_indices(indices)]
+
+
+class FormationVecEnv(OneObjectVecEnvMethods, VecEnv):
     """SB3 VecEnv of ``n_formations`` formations (see the module docstring).
 
     >>> from stable_baselines3 import PPO
@@ -232,17 +249,6 @@ class FormationVecEnv(VecEnv):
         image (what ``VecVideoRecorder`` records); None (with a warning) without a render mode."""
         return super().render(mode=mode)
 
-    def get_attr(self, attr_name, indices=None):
-        return [getattr(self, attr_name) for _ in self._get_indices(indices)]
-
-    def set_attr(self, attr_name, value, indices=None) -> None:
-        setattr(self, attr_name, value)
-
-    def env_method(self, method_name, *method_args, indices=None, **method_kwargs):
-        return [getattr(self, method_name)(*method_args, **method_kwargs) for _ in self._get_indices(indices)]
-
-    def env_is_wrapped(self, wrapper_class, indices=None):
-        return [False for _ in self._get_indices(indices)]
 
 
 class FormationVectorEnv(gym.vector.VectorEnv):
