@@ -1,7 +1,9 @@
 """``formation-env evaluate``: compare policies (SB3 zips, RLlib checkpoints, the thesis PID and the
 classical formation-keeping PID) on held-out seeds with the wake and Dryden turbulence on; writes
-results.json (summaries with 95 % intervals, paired comparisons against the baselines, seed groups),
-results.md and comparison plots."""
+results.json (summaries with 95 % intervals, paired comparisons against the baselines, seed groups and,
+for policies trained with several seeds, rliable's IQM / mean / median over seeds x episodes with
+stratified bootstrap intervals and the probability of improvement over each baseline), results.md,
+comparison plots, the performance profiles (performance_profile.png) and marl_eval.json."""
 
 from __future__ import annotations
 
@@ -58,7 +60,9 @@ def register(sub) -> None:
                         "the observation sizes must still agree")
     p.add_argument("--out", default=None, help="output directory (default runs/eval-<scenario>-<timestamp>)")
     p.add_argument("--overwrite", action="store_true", help="allow an existing non-empty output directory")
-    p.add_argument("--no-plots", action="store_true", help="write only results.json and results.md")
+    p.add_argument("--no-plots", action="store_true", help="write no figures (results.json, results.md, marl_eval.json)")
+    p.add_argument("--bootstrap-resamples", type=bounded_int(100, 1_000_000), default=None,
+                   help="resamples of every bootstrap interval, 100..1000000 (default 10000)")
     p.set_defaults(func=run)
 
 
@@ -87,14 +91,22 @@ def run(args) -> int:
     rep = evaluate(args.policy, scenario=args.scenario, episodes=args.episodes, seeds=args.seeds,
                    turbulence_sigma_mps=args.turbulence, wake=not args.no_wake, compute_benefit=args.benefit,
                    action_mode=args.action_mode, out_dir=out, overwrite=args.overwrite, plots=not args.no_plots,
-                   duration_s=args.duration, turbulence_field=args.turbulence_field, log=print)
+                   duration_s=args.duration, turbulence_field=args.turbulence_field, log=print,
+                   **({} if args.bootstrap_resamples is None else {"n_boot": args.bootstrap_resamples}))
     print(rep["table_markdown"])
     if rep["comparison_markdown"]:
         print("paired comparisons (per-episode RMS slot error, reduction = baseline - policy):\n"
               + rep["comparison_markdown"])
     if rep["groups_markdown"]:
         print("training seeds:\n" + rep["groups_markdown"])
-    print(f"wrote {out}/results.json, results.md" + ("" if args.no_plots else ", metrics.png, slot_error.png"))
+    agg = rep.get("aggregates") or {}
+    if agg.get("scores"):
+        print("aggregates over training seeds x episodes (rliable, 95 % stratified bootstrap):\n"
+              + rep.get("aggregates_markdown", ""))
+    files = ["results.json", "results.md"] + (["marl_eval.json"] if agg else [])
+    if not args.no_plots:
+        files += ["metrics.png", "slot_error.png"] + (["performance_profile.png"] if agg.get("scores") else [])
+    print(f"wrote {out}/" + ", ".join(files))
     return 0
 
 

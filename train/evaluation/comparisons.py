@@ -1,5 +1,6 @@
 """Paired comparisons of policies with the baselines on the same episodes, and seed groups (one
-recipe trained with several seeds)."""
+recipe trained with several seeds), on :mod:`train.evaluation.stats` (SciPy). The seed groups' rliable
+aggregates (runs and episodes resampled together) are :mod:`train.evaluation.aggregates`'."""
 
 from __future__ import annotations
 
@@ -47,11 +48,12 @@ def compare_episodes(baseline: list[dict], candidate: list[dict] | None = None, 
 
 
 def comparisons(episodes: dict[str, list[dict]], baselines: dict[str, str] | None = None, *,
-                candidates: Sequence[str] | None = None, n_boot: int = N_BOOT) -> dict:
+                candidates: Sequence[str] | None = None, n_boot: int = N_BOOT, seed: int = 0) -> dict:
     """``{policy: {baseline: compare_episodes(...)}}`` for every candidate policy against every
     baseline present, and pid_formation against pid when both are. ``baselines`` maps the baseline
     kind ("pid", "pid_formation") to its policy name (default: the names themselves, when evaluated);
-    ``candidates`` defaults to every other policy except a baseline given twice ("pid-2")."""
+    ``candidates`` defaults to every other policy except a baseline given twice ("pid-2"). Every
+    bootstrap draws from ``default_rng(seed)``."""
     if baselines is None:
         baselines = {b: b for b in BASELINES if b in episodes}
     base_names = set(baselines.values())
@@ -59,10 +61,10 @@ def comparisons(episodes: dict[str, list[dict]], baselines: dict[str, str] | Non
         candidates = [n for n in episodes if n not in base_names and not _is_duplicate_baseline(n, base_names)]
     out: dict[str, dict] = {}
     for name in candidates if baselines else ():
-        out[name] = {b: compare_episodes(episodes[b], episodes[name], n_boot=n_boot) for b in baselines.values()}
+        out[name] = {b: compare_episodes(episodes[b], episodes[name], n_boot=n_boot, seed=seed) for b in baselines.values()}
     if "pid" in baselines and "pid_formation" in baselines:
         pf, p = baselines["pid_formation"], baselines["pid"]
-        out[pf] = {p: compare_episodes(episodes[p], episodes[pf], n_boot=n_boot)}
+        out[pf] = {p: compare_episodes(episodes[p], episodes[pf], n_boot=n_boot, seed=seed)}
     return out
 
 
@@ -87,7 +89,8 @@ def _scalar_metrics(summary: dict) -> list[str]:
             if k not in ("episodes", "wall_s") and isinstance(v, (int, float)) and not isinstance(v, bool)]
 
 
-def group_report(members: dict[str, dict], baselines: dict[str, list[dict]], *, n_boot: int = N_BOOT) -> dict:
+def group_report(members: dict[str, dict], baselines: dict[str, list[dict]], *, n_boot: int = N_BOOT,
+                 seed: int = 0) -> dict:
     """One policy trained with several seeds: ``members`` maps each seed's policy name to its
     ``{"summary", "episodes"}``. Returns ``policies``, ``n_seeds``, ``summary`` (for every scalar
     summary metric, :func:`train.evaluation.stats.seed_spread` of the seeds' values: mean, std, min, max, n),
@@ -103,6 +106,6 @@ def group_report(members: dict[str, dict], baselines: dict[str, list[dict]], *, 
     summary = {k: seed_spread([members[n]["summary"][k] for n in names]) for k in keys}
     per_episode = {k: np.mean([_column(members[n]["episodes"], k) for n in names], axis=0)
                    for k in ("rms_slot_error_m", "reconfig_success") if k in first[0]}
-    comps = {b: compare_episodes(eps, candidate_values=per_episode, n_boot=n_boot) for b, eps in baselines.items()}
+    comps = {b: compare_episodes(eps, candidate_values=per_episode, n_boot=n_boot, seed=seed) for b, eps in baselines.items()}
     return {"policies": names, "n_seeds": len(names), "summary": summary,
             "per_episode": {k: v.tolist() for k, v in per_episode.items()}, "comparisons": comps}

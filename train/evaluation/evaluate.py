@@ -26,25 +26,31 @@ reconfig_time_s                time from the start of the slot schedule until th
                                1 span of its final slot for good (NaN when it never is)
 =============================  ======================================================================
 
-Statistics (``train/stats.py``; 95 %, bootstrap intervals percentile with 10,000 resamples drawn from a
-fixed seed, so the same episodes always give the same numbers):
+Statistics (95 %; :mod:`train.evaluation.stats` on SciPy, :mod:`train.evaluation.aggregates` on rliable;
+every bootstrap 10,000 resamples from a fixed seed, so the same episodes always give the same numbers):
 
-* per policy (``summary``): the means above, ``rms_slot_error_m_ci`` (bootstrap interval of the mean),
-  ``collisions`` / ``collision_rate`` / ``collision_rate_ci`` (Wilson), ``reconfig_success_rate`` /
-  ``reconfig_success_rate_ci`` (Wilson), ``min_separation_m`` (smallest over all episodes) and
-  ``min_separation_m_p05`` (5th percentile of the per-episode minima);
+* per policy (``summary``): the means above, ``rms_slot_error_m_ci`` (``scipy.stats.bootstrap``
+  percentile interval of the mean), ``collisions`` / ``collision_rate`` / ``collision_rate_ci`` (Wilson,
+  ``scipy.stats.binomtest``), ``reconfig_success_rate`` / ``reconfig_success_rate_ci`` (Wilson),
+  ``min_separation_m`` (smallest over all episodes) and ``min_separation_m_p05`` (5th percentile of the
+  per-episode minima);
 * ``comparisons[<policy>][<baseline>]``: every policy against each baseline evaluated beside it ("pid",
-  "pid_formation"; and pid_formation against pid), paired by episode: :func:`train.stats.paired_comparison`
+  "pid_formation"; and pid_formation against pid), paired by episode: :func:`train.evaluation.stats.paired_comparison`
   of the per-episode RMS slot error (reduction = baseline - policy, m, mean and median with intervals,
   relative reduction of the mean, fraction of episodes better, sign test) and, with a moving slot,
-  :func:`train.stats.paired_rate_difference` of the reconfiguration success;
+  :func:`train.evaluation.stats.paired_rate_difference` of the reconfiguration success;
 * ``groups[<name>]``: policies ``<name>_seed<k>`` (the same recipe trained with several seeds; two or
   more), or the ``groups`` argument: each summary metric's mean, std (ddof 1), min and max across the
-  seeds, and the paired comparison of the seed-averaged per-episode metric against each baseline.
+  seeds, and the paired comparison of the seed-averaged per-episode metric against each baseline;
+* ``aggregates`` (with a group of two or more seeds): rliable's IQM, mean and median of the task's
+  score over runs x episodes with stratified bootstrap intervals, the probability of improvement of each
+  group over each baseline, and the performance profiles (:func:`train.evaluation.aggregates.evaluation_aggregates`;
+  ``performance_profile.png``); ``marl_eval.json`` has the same episodes in marl-eval's format.
 
 The parts: :mod:`train.evaluation.policy` (:class:`EvalPolicy`), :mod:`train.policy_loader`
 (:func:`load_policy`), :mod:`train.evaluation.episodes` (the episodes and their metrics),
-:mod:`train.eval_summary`, :mod:`train.comparisons` and :mod:`train.eval_report` (tables, plots).
+:mod:`train.evaluation.summary`, :mod:`train.evaluation.comparisons`, :mod:`train.evaluation.aggregates`,
+:mod:`train.evaluation.marl_eval` and :mod:`train.evaluation.report` (tables, plots).
 This module runs them (:func:`evaluate`) and re-exports their names.
 """
 
@@ -59,8 +65,10 @@ from pathlib import Path
 from ..config import TEST_SEED_BASE
 from .episodes import SPAN_M, SUCCESS_WINDOW_S, eval_env_config, run_episodes
 from .policy import EvalPolicy
+from .aggregates import INSTALL_HINT, aggregates_table, evaluation_aggregates, plot_profiles, profile_panels
 from .comparisons import BASELINES, compare_episodes, comparisons, group_report, seed_groups
 from .policy_loader import load_policy
+from .marl_eval import marl_eval_data, training_steps, write_marl_eval
 from .report import write_plots, comparison_table, groups_table, markdown_table
 from .stats import N_BOOT
 from .summary import selection_score, summarise
@@ -172,12 +180,18 @@ def evaluate(policies: Sequence[str], *, scenario: str, episodes: int = TEST_EPI
               "policies": {n: {k: v for k, v in r.items()} for n, r in results.items()},
               "baselines": baselines, "comparisons": comps, "groups": group_reports,
               "statistics": {"confidence": 0.95, "n_boot": n_boot, "bootstrap_seed": 0,
-                             "bootstrap": "percentile, episodes resampled jointly across the paired policies",
-                             "rates": "Wilson score interval", "sign_test": "exact two-sided, ties left out",
-                             "reduction": "baseline - policy, per episode, in the metric's units"}}
+                             "bootstrap": "scipy.stats.bootstrap, percentile, episodes resampled jointly across the "
+                                          "paired policies (paired=True)",
+                             "rates": "Wilson score interval (scipy.stats.binomtest.proportion_ci)",
+                             "sign_test": "exact two-sided (scipy.stats.binomtest), ties left out",
+                             "reduction": "baseline - policy, per episode, in the metric's units",
+                             "aggregates": "rliable: IQM / mean / median, stratified bootstrap over runs x episodes, "
+                                           "probability of improvement, performance profiles"}}
     report["table_markdown"] = markdown_table({n: r["summary"] for n, r in results.items()})
     report["comparison_markdown"] = comparison_table(comps, group_reports)
     report["groups_markdown"] = groups_table(group_reports)
+    report["aggregates"] = _aggregates(episodes_by_name, group_spec, list(baselines.values()), n_boot, log)
+    report["aggregates_markdown"] = aggregates_table(report["aggregates"])
     if out is not None:
         from formation_env.io import atomic_write_json, atomic_write_text
 
@@ -189,15 +203,42 @@ def evaluate(policies: Sequence[str], *, scenario: str, episodes: int = TEST_EPI
         atomic_write_json(out / "results.json", slim, overwrite=overwrite)
         head = (f"# Evaluation: {scenario}\n\n{len(seeds)} held-out episodes (seeds {seeds[0]}..{seeds[-1]}), "
                 f"wake {'on' if wake else 'off'}, Dryden turbulence sigma {turbulence_sigma_mps:g} m/s. Intervals: 95 %, "
-                f"percentile bootstrap over episodes ({n_boot} resamples, seed 0) for errors, Wilson for rates.\n\n")
+                f"percentile bootstrap over episodes (scipy.stats.bootstrap, {n_boot} resamples, seed 0) for errors, "
+                f"Wilson for rates; rliable aggregates over training seeds x episodes.\n\n")
         text = head + report["table_markdown"]
         if report["comparison_markdown"]:
             text += ("\n## Paired comparisons (per-episode RMS slot error; reduction = baseline - policy)\n\n"
                      + report["comparison_markdown"])
         if report["groups_markdown"]:
             text += "\n## Training seeds\n\n" + report["groups_markdown"]
+        if report["aggregates_markdown"]:
+            text += ("\n## Aggregates over training seeds and episodes (rliable; stratified bootstrap, 95 %)\n\n"
+                     + report["aggregates_markdown"])
         atomic_write_text(out / "results.md", text, overwrite=overwrite)
+        multi = {g: m for g, m in group_spec.items() if len(m) >= 2}
+        if multi:
+            write_marl_eval(out / "marl_eval.json", marl_eval_data(
+                scenario, episodes_by_name, multi, list(baselines.values()),
+                step_counts={n: training_steps(r["policy"]) for n, r in results.items()}), overwrite=overwrite)
         if plots:
             report["plots"] = write_plots(out, results, scenario, overwrite=overwrite)
+            if report["aggregates"].get("scores"):
+                report["plots"].append(str(plot_profiles(
+                    out / "performance_profile.png", profile_panels(report["aggregates"]), overwrite=overwrite,
+                    title=f"{scenario}: {len(seeds)} held-out episodes")))
         report["out_dir"] = str(out)
     return report
+
+
+def _aggregates(episodes: dict, groups: dict, baselines: list[str], n_boot: int, log) -> dict:
+    """:func:`evaluation_aggregates` of the seed groups (two or more seeds) and baselines; without rliable
+    (the evaluation extra) a note instead, so that an evaluation never fails for want of it."""
+    if not any(len(m) >= 2 for m in groups.values()):
+        return {}
+    try:
+        agg = evaluation_aggregates(episodes, groups, baselines, n_boot=n_boot)
+    except ImportError:
+        if log:
+            log(f"note: no rliable aggregates ({INSTALL_HINT})")
+        return {"skipped": INSTALL_HINT}
+    return agg

@@ -2,16 +2,20 @@
 ``pid_formation`` at the nominal slot and the extremum seeker, on 100 held-out episodes, each measured
 against its reference optimum (:mod:`train.evaluation.wake_surfing_rollout`).
 
-Statistics (95 %, percentile bootstrap over episodes, 10,000 resamples from seed 0; Wilson for rates):
+Statistics (95 %, ``scipy.stats.bootstrap`` percentile intervals over episodes, 10,000 resamples from seed 0;
+Wilson for rates, :mod:`train.evaluation.stats`):
 per controller the mean saving and the mean of the per-episode ratio to the reference optimum with
 intervals; time to reach 80 % of the optimum (episodes that never do count as the episode's length in
 the mean and are reported separately); collisions, episodes outside the safe box for more than 1 s,
 the smallest separation. Paired by episode: each policy (and the three training seeds averaged per
 episode) against each baseline, the gain in saving ratio (policy - baseline) and, against extremum
-seeking, the time saved to 80 % (extremum seeking - policy).
+seeking, the time saved to 80 % (extremum seeking - policy). Over the training seeds and episodes
+(``aggregates``, :mod:`train.evaluation.aggregates`, rliable): IQM, mean and median of the harvest ratio with
+stratified bootstrap intervals and the probability of improvement of the policies over each baseline.
 
 ``python -m train.evaluation.wake_surfing_eval POLICY.zip [...] --out DIR`` (a new directory) writes
-``results.json``, ``results.md`` and, with ``--figure PATH``, the saving map with the trajectories.
+``results.json``, ``results.md``, ``marl_eval.json`` and ``performance_profile.png`` (with several seeds) and,
+with ``--figure PATH``, the saving map with the trajectories.
 ``--tune-es`` runs the extremum seeker's gain sweep on training seeds instead (docs/wake_surfing.md).
 """
 
@@ -28,6 +32,9 @@ from pathlib import Path
 import numpy as np
 
 from ..config import TEST_SEED_BASE
+from .aggregates import aggregates_table, evaluation_aggregates, plot_profiles, profile_panels
+from .comparisons import seed_groups
+from .marl_eval import marl_eval_data, training_steps, write_marl_eval
 from .stats import N_BOOT, bootstrap_ci, paired_comparison, wilson_interval
 from .wake_surfing_rollout import es_surfer, fly, oracle_surfer, pid_formation_surfer, pid_surfer, sb3_surfer
 
@@ -44,7 +51,7 @@ def _censored_times(eps: list[dict]) -> np.ndarray:
     return np.array([e["time_to_80_s"] if math.isfinite(e["time_to_80_s"]) else e["duration_s"] for e in eps])
 
 
-def summarise_surfer(eps: list[dict], *, n_boot: int = N_BOOT) -> dict:
+def summarise_surfer(eps: list[dict], *, n_boot: int = N_BOOT, seed: int = 0) -> dict:
     n = len(eps)
     col = lambda k: np.array([float(e[k]) for e in eps])  # noqa: E731
     ratio, saving = col("saving_ratio"), col("saving")
@@ -54,12 +61,12 @@ def summarise_surfer(eps: list[dict], *, n_boot: int = N_BOOT) -> dict:
     collisions = int(sum(e["collision"] for e in eps))
     return {
         "episodes": n,
-        "saving": float(saving.mean()), "saving_ci": list(bootstrap_ci(saving, "mean", n_boot=n_boot)),
+        "saving": float(saving.mean()), "saving_ci": list(bootstrap_ci(saving, "mean", n_boot=n_boot, seed=seed)),
         "reference_saving": float(col("reference_saving").mean()),
-        "saving_ratio": float(ratio.mean()), "saving_ratio_ci": list(bootstrap_ci(ratio, "mean", n_boot=n_boot)),
+        "saving_ratio": float(ratio.mean()), "saving_ratio_ci": list(bootstrap_ci(ratio, "mean", n_boot=n_boot, seed=seed)),
         "reached_80_frac": float(reached.mean()),
         "time_to_80_s_mean_censored": float(times.mean()),
-        "time_to_80_s_mean_censored_ci": list(bootstrap_ci(times, "mean", n_boot=n_boot)),
+        "time_to_80_s_mean_censored_ci": list(bootstrap_ci(times, "mean", n_boot=n_boot, seed=seed)),
         "time_to_80_s_median_censored": float(np.median(times)),
         "collisions": collisions, "collision_rate_ci": list(wilson_interval(collisions, n)),
         "crashes": int(sum(e["crashed"] for e in eps)),
@@ -70,14 +77,14 @@ def summarise_surfer(eps: list[dict], *, n_boot: int = N_BOOT) -> dict:
     }
 
 
-def paired_gain(baseline, candidate, *, higher_is_better: bool = True, n_boot: int = N_BOOT) -> dict:
+def paired_gain(baseline, candidate, *, higher_is_better: bool = True, n_boot: int = N_BOOT, seed: int = 0) -> dict:
     """Per-episode gain of the candidate over the baseline (candidate - baseline when higher is better,
     baseline - candidate otherwise) with bootstrap intervals, episodes better / worse and the sign test
-    (:func:`train.stats.paired_comparison`)."""
+    (:func:`train.evaluation.stats.paired_comparison`, resamples from ``default_rng(seed)``)."""
     if higher_is_better:
-        r = paired_comparison(candidate, baseline, n_boot=n_boot, lower_is_better=True)
+        r = paired_comparison(candidate, baseline, n_boot=n_boot, lower_is_better=True, seed=seed)
     else:
-        r = paired_comparison(baseline, candidate, n_boot=n_boot, lower_is_better=True)
+        r = paired_comparison(baseline, candidate, n_boot=n_boot, lower_is_better=True, seed=seed)
     return {"n": r["n"], "baseline_mean": r["candidate_mean"] if higher_is_better else r["baseline_mean"],
             "candidate_mean": r["baseline_mean"] if higher_is_better else r["candidate_mean"],
             "mean_gain": r["mean_reduction"], "mean_gain_ci": list(r["mean_reduction_ci"]),
@@ -89,12 +96,27 @@ def _per_episode(eps: list[dict]) -> dict:
     return {"saving_ratio": np.array([e["saving_ratio"] for e in eps]), "time_to_80_s": _censored_times(eps)}
 
 
-def _compare(cand: dict, base: dict, base_name: str, n_boot: int) -> dict:
-    out = {"saving_ratio": paired_gain(base["saving_ratio"], cand["saving_ratio"], n_boot=n_boot)}
+def _compare(cand: dict, base: dict, base_name: str, n_boot: int, seed: int = 0) -> dict:
+    out = {"saving_ratio": paired_gain(base["saving_ratio"], cand["saving_ratio"], n_boot=n_boot, seed=seed)}
     if base_name == "extremum_seeking":
         out["time_to_80_s"] = paired_gain(base["time_to_80_s"], cand["time_to_80_s"], higher_is_better=False,
-                                          n_boot=n_boot)
+                                          n_boot=n_boot, seed=seed)
     return out
+
+
+def surfing_comparisons(episodes_by: dict[str, list[dict]], names: list[str], *, n_boot: int = N_BOOT,
+                        seed: int = 0) -> dict:
+    """Paired by episode: each policy in ``names`` against the three baselines, extremum seeking against
+    the two PIDs, and (two or more policies) their per-episode mean ``policy_seed_mean`` against the
+    baselines (the oracle ceilings are summarised, not compared: they know the wind)."""
+    per = {n: _per_episode(episodes_by[n]) for n in [*BASELINE_NAMES, *names]}
+    comps = {n: {b: _compare(per[n], per[b], b, n_boot, seed) for b in BASELINE_NAMES} for n in names}
+    comps["extremum_seeking"] = {b: _compare(per["extremum_seeking"], per[b], b, n_boot, seed)
+                                 for b in ("pid", "pid_formation")}
+    if len(names) >= 2:
+        group = {k: np.mean([per[n][k] for n in names], axis=0) for k in ("saving_ratio", "time_to_80_s")}
+        comps["policy_seed_mean"] = {b: _compare(group, per[b], b, n_boot, seed) for b in BASELINE_NAMES}
+    return comps
 
 
 def evaluate_wake_surfing(policies, *, episodes: int = 100, seeds=None, es_gains=None, n_boot: int = N_BOOT,
@@ -128,22 +150,28 @@ def evaluate_wake_surfing(policies, *, episodes: int = 100, seeds=None, es_gains
     report = {"seeds": seeds, "turbulence_sigma_mps": config.randomisation.turbulence_sigma_mps,
               "randomisation": dataclasses.asdict(config.randomisation), "controllers": {n: {"summary": summarise_surfer(e, n_boot=n_boot), "episodes": e}
                                               for n, e in episodes_by.items()}}
-    per = {n: _per_episode(e) for n, e in episodes_by.items()}
-    comps = {}
-    for n in names:
-        comps[n] = {b: _compare(per[n], per[b], b, n_boot) for b in BASELINE_NAMES}
-    comps["extremum_seeking"] = {b: _compare(per["extremum_seeking"], per[b], b, n_boot) for b in ("pid", "pid_formation")}
-    # (the oracle ceilings are summarised, not compared: they know the wind)
+    comps = surfing_comparisons(episodes_by, names, n_boot=n_boot)
     if len(names) >= 2:
-        group = {k: np.mean([per[n][k] for n in names], axis=0) for k in ("saving_ratio", "time_to_80_s")}
-        comps["policy_seed_mean"] = {b: _compare(group, per[b], b, n_boot) for b in BASELINE_NAMES}
         report["seed_spread"] = {k: {"mean": float(np.mean(v)), "std": float(np.std(v, ddof=1)), "min": float(np.min(v)),
                                      "max": float(np.max(v))}
                                  for k, v in {m: [report["controllers"][n]["summary"][m] for n in names]
                                               for m in ("saving", "saving_ratio", "time_to_80_s_mean_censored")}.items()}
     report["comparisons"] = comps
+    report["policy_specs"] = {s.name: str(p) for s, p in zip(surfers[3:], policies)}
+    report["groups"] = surfing_groups(names)
+    report["aggregates"] = evaluation_aggregates(episodes_by, report["groups"], list(BASELINE_NAMES), n_boot=n_boot)
     report["markdown"] = markdown(report)
     return report
+
+
+def surfing_groups(names: list[str]) -> dict[str, list[str]]:
+    """The policies as seed groups: ``<name>_seed<k>`` groups, else all of them as ``policy_seeds`` (two or more)."""
+    groups = seed_groups(names)
+    grouped = {n for m in groups.values() for n in m}
+    rest = [n for n in names if n not in grouped]
+    if len(rest) >= 2:
+        groups["policy_seeds"] = rest
+    return groups
 
 
 def markdown(report: dict) -> str:
@@ -166,6 +194,9 @@ def markdown(report: dict) -> str:
             rows.append(f"| {n} | {b} | {g['mean_gain']:+.3f} [{g['mean_gain_ci'][0]:+.3f}, {g['mean_gain_ci'][1]:+.3f}] | "
                         f"{g['n_better']} / {g['n_worse']} | "
                         + (f"{t['mean_gain']:+.1f} [{t['mean_gain_ci'][0]:+.1f}, {t['mean_gain_ci'][1]:+.1f}]" if t else "") + " |")
+    agg = aggregates_table(report.get("aggregates") or {})
+    if agg:
+        rows += ["", "Over training seeds x episodes (rliable, stratified bootstrap 95 %):", "", agg]
     return "\n".join(rows) + "\n"
 
 
@@ -241,6 +272,20 @@ def plot_surfing_figure(path, policy_zip: str, *, es_gains=None, crosswind_mps: 
     return out
 
 
+def write_outputs(out: Path, report: dict, *, overwrite: bool = False) -> list[Path]:
+    """With several policy seeds: ``marl_eval.json`` (every controller's episodes in marl-eval's format, the
+    oracle ceilings left out) and ``performance_profile.png`` (the rliable profiles of the harvest ratio)."""
+    if not report.get("aggregates"):
+        return []
+    eps = {n: r["episodes"] for n, r in report["controllers"].items()}
+    specs = report.get("policy_specs", {})
+    data = marl_eval_data("wake_surfing", eps, report["groups"], list(BASELINE_NAMES),
+                          step_counts={n: training_steps(p) for n, p in specs.items()})
+    return [write_marl_eval(out / "marl_eval.json", data, overwrite=overwrite),
+            plot_profiles(out / "performance_profile.png", profile_panels(report["aggregates"]), overwrite=overwrite,
+                          title=f"wake surfing: {len(report['seeds'])} held-out episodes")]
+
+
 def _rounded(x, digits: int = 5):
     """Floats rounded to ``digits`` decimals throughout (the committed JSON stays small)."""
     if isinstance(x, float):
@@ -308,6 +353,7 @@ def _main(argv=None) -> int:
                 "saving / reference optimum's; intervals 95 % percentile bootstrap over episodes (10,000 resamples, "
                 "seed 0), Wilson for rates. Oracle rows know the wind (a ceiling, not a controller).\n\n")
         atomic_write_text(out / "results.md", head + report["markdown"], overwrite=a.overwrite)
+        write_outputs(out, report, overwrite=a.overwrite)
     print(report["markdown"])
     if a.figure and a.policies:
         print(plot_surfing_figure(a.figure, a.policies[0], overwrite=a.overwrite))

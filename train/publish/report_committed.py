@@ -7,8 +7,10 @@ on 100 held-out test episodes, attach the results to their metadata and draw the
 For each task: ``formation-env evaluate`` with the three seeds, ``pid`` and ``pid_formation`` (frozen
 Dryden turbulence sigma 1 m/s, wake on, seeds 20000000000..), written to ``OUT/<task>/``; the slim record
 (per-episode metrics, summaries, paired comparisons, seed groups) ``<task>_ppo_setpoints_evaluation.json``;
-each policy's ``NAME.json`` with its summary and comparisons. Figures: ``eval_<task>_slot_error.png`` and
-``training_curves.png`` (validation curves with the baselines' RMS on the same validation episodes).
+each policy's ``NAME.json`` with its summary and comparisons; the rliable aggregates over the three seeds x
+episodes (in the record and ``OUT/<task>/results.md``) and ``OUT/<task>/marl_eval.json``. Figures:
+``eval_<task>_slot_error.png``, ``eval_<task>_performance_profile.png`` (rliable) and ``training_curves.png``
+(validation curves with the baselines' RMS on the same validation episodes).
 
 Without ``--overwrite`` the records, metadata and figures go to ``OUT/policies/`` and ``OUT/figures/``
 (nothing tracked is touched; OUT must be new or empty); with ``--overwrite`` they replace
@@ -50,7 +52,8 @@ def plan(out: Path, tasks, *, overwrite: bool) -> dict:
     files = [out / "validation_baselines.json", figures / "training_curves.png"]
     for task in tasks:
         files += [out / task / "results.json", out / task / "results.md", policies / f"{task}_ppo_setpoints_evaluation.json",
-                  figures / f"eval_{task}_slot_error.png"] + [policies / f"{n}.json" for n in policy_names(task)]
+                  figures / f"eval_{task}_slot_error.png", figures / f"eval_{task}_performance_profile.png"] + \
+            [policies / f"{n}.json" for n in policy_names(task)]
     return {"policies": policies, "figures": figures, "eval": {t: out / t for t in tasks}, "files": files}
 
 
@@ -134,8 +137,12 @@ def main(argv: list[str] | None = None) -> int:
         attach_evaluation(names, p["eval"][task] / "results.json",
                           p["policies"] / f"{task}_ppo_setpoints_evaluation.json", overwrite=a.overwrite,
                           meta_dir=p["policies"])
-        atomic_write(p["figures"] / f"eval_{task}_slot_error.png",
-                     lambda tmp, src=p["eval"][task] / "slot_error.png": shutil.copyfile(src, tmp), overwrite=a.overwrite)
+        print(rep.get("aggregates_markdown", ""))
+        for fig in ("slot_error", "performance_profile"):  # the profile needs rliable (the evaluation extra)
+            if fig == "performance_profile" and not (p["eval"][task] / f"{fig}.png").is_file():
+                continue
+            atomic_write(p["figures"] / f"eval_{task}_{fig}.png",
+                         lambda tmp, src=p["eval"][task] / f"{fig}.png": shutil.copyfile(src, tmp), overwrite=a.overwrite)
         val = evaluate(["pid", "pid_formation"], scenario=task, episodes=a.validation_episodes,
                        seeds=[VALIDATION_SEED_BASE], plots=False)
         baselines[task] = {f"{n} (validation)": val["policies"][n]["summary"]["rms_slot_error_m"]
