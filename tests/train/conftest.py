@@ -18,3 +18,26 @@ def tiny():
     import copy
 
     return lambda algo: copy.deepcopy(TINY[algo])
+
+
+@pytest.fixture
+def seeded_candidates(monkeypatch):
+    """``seeded_candidates(step)``: ``load_policy('cand_seed<k>')`` gives the PID plus a constant throttle
+    residual of ``step * k`` (a different controller per seed); every other spec loads as usual."""
+    import numpy as np
+
+    import train.evaluation.evaluate as ev
+    from train.evaluation.evaluate import EvalPolicy
+
+    real = ev.load_policy
+
+    def install(step):
+        def load(spec, **kw):
+            if spec.startswith("cand_seed"):
+                k = int(spec[len("cand_seed"):])
+                return EvalPolicy(spec, "residual", lambda o: np.tile([0.0, 0.0, 0.0, step * k], (o.shape[0], 1)))
+            return real(spec, **kw)
+
+        monkeypatch.setattr(ev, "load_policy", load)
+
+    return install

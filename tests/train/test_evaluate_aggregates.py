@@ -12,23 +12,14 @@ pytest.importorskip("rliable")
 
 import train.evaluation.evaluate as ev  # noqa: E402
 from formation_env.cli import main  # noqa: E402
-from train.evaluation.evaluate import EvalPolicy  # noqa: E402
 
 POLICIES = Path(__file__).resolve().parents[2] / "train" / "policies"
 
 
 @pytest.fixture
-def three_seeds(monkeypatch):
+def three_seeds(seeded_candidates):
     """'cand_seed<k>': the PID plus a constant throttle residual of 0.1 k (a different controller per seed)."""
-    real = ev.load_policy
-
-    def load(spec, **kw):
-        if spec.startswith("cand_seed"):
-            k = int(spec[len("cand_seed"):])
-            return EvalPolicy(spec, "residual", lambda o: np.tile([0.0, 0.0, 0.0, 0.1 * k], (o.shape[0], 1)))
-        return real(spec, **kw)
-
-    monkeypatch.setattr(ev, "load_policy", load)
+    seeded_candidates(0.1)
 
 
 def test_cli_evaluate_three_seeds_reports_rliable_aggregates(tmp_path, capsys, three_seeds):

@@ -100,18 +100,10 @@ def fake_pid_formation(monkeypatch):
 
 
 @pytest.fixture
-def fake_candidates(monkeypatch):
+def fake_candidates(seeded_candidates):
     """Policies 'cand_seed<k>': the PID plus a constant throttle residual of 0.2 k (a different
     controller per seed)."""
-    real = ev.load_policy
-
-    def load(spec, **kw):
-        if spec.startswith("cand_seed"):
-            k = int(spec[len("cand_seed"):])
-            return EvalPolicy(spec, "residual", lambda o: np.tile([0.0, 0.0, 0.0, 0.2 * k], (o.shape[0], 1)))
-        return real(spec, **kw)
-
-    monkeypatch.setattr(ev, "load_policy", load)
+    seeded_candidates(0.2)
 
 
 def test_evaluate_defaults_to_100_episodes_and_pid_formation_is_a_policy(fake_pid_formation):
