@@ -58,7 +58,7 @@ import numpy as np
 from .frozen_field_correlation import dryden_correlation, frozen_field_theory, isotropic_correlation
 from .frozen_field_filters import (FrozenFieldParams, FrozenFieldState, advance_field_one, advance_kernel,
                                    frozen_field_params, reset_kernel)
-from .frozen_field_rng import N_STREAMS_PER_LANE, counter_bits, counter_normal_pair, formation_key
+from .frozen_field_rng import N_STREAMS_PER_LANE, counter_bits, counter_normal_pair, formation_key, reset_keys
 from .frozen_field_sampling import rollout_kernel, sample_field_one, sample_kernel
 
 # advance_field_one and sample_field_one (one formation's filter step and read) are for compiled
@@ -128,16 +128,7 @@ def _check_state(params: FrozenFieldParams, state) -> tuple[int, int]:
 def frozen_field_reset(params: FrozenFieldParams, state: FrozenFieldState, indices, seeds) -> None:
     """Restart formations ``indices`` from integer ``seeds`` (one per index, >= 0), in place."""
     bsz, _ = _check_state(params, state)
-    idx = np.atleast_1d(np.asarray(indices))
-    if idx.ndim != 1 or (idx.size and not np.issubdtype(idx.dtype, np.integer)):
-        raise ValueError(f"indices must be a 1-D integer array, got {indices!r}")
-    idx = idx.astype(np.int64)
-    if idx.size and (idx.min() < 0 or idx.max() >= bsz):
-        raise ValueError(f"indices must lie in [0, {bsz}), got {indices!r}")
-    seed_list = [seeds] if np.isscalar(seeds) else list(seeds)
-    if len(seed_list) != idx.size:
-        raise ValueError(f"{len(seed_list)} seeds for {idx.size} indices")
-    keys = np.array([formation_key(s) for s in seed_list], dtype=np.uint64)
+    idx, keys = reset_keys(bsz, indices, seeds)
     reset_kernel(params, state, idx, keys)
 
 

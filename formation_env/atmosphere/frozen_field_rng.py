@@ -13,7 +13,7 @@ import math
 import numba as nb
 import numpy as np
 
-__all__ = ["N_STREAMS_PER_LANE", "counter_bits", "counter_normal_pair", "formation_key"]
+__all__ = ["N_STREAMS_PER_LANE", "counter_bits", "counter_normal_pair", "formation_key", "reset_keys"]
 
 _jit = nb.njit(cache=True, error_model="numpy")
 
@@ -37,6 +37,20 @@ def formation_key(seed: int) -> np.uint64:
         raise ValueError(f"seed must be a non-negative integer, got {seed!r}")
     return np.random.SeedSequence(int(seed)).generate_state(1, dtype=np.uint64)[0]
 
+
+def reset_keys(batch_size: int, indices, seeds) -> tuple[np.ndarray, np.ndarray]:
+    """Checked reset arguments of a batched field: ``indices`` (1-D integers in [0, batch_size)) as int64
+    and the :func:`formation_key` of each of ``seeds`` (one non-negative integer per index) as uint64."""
+    idx = np.atleast_1d(np.asarray(indices))
+    if idx.ndim != 1 or (idx.size and not np.issubdtype(idx.dtype, np.integer)):
+        raise ValueError(f"indices must be a 1-D integer array, got {indices!r}")
+    idx = idx.astype(np.int64)
+    if idx.size and (idx.min() < 0 or idx.max() >= batch_size):
+        raise ValueError(f"indices must lie in [0, {batch_size}), got {indices!r}")
+    seed_list = [seeds] if np.isscalar(seeds) else list(seeds)
+    if len(seed_list) != idx.size:
+        raise ValueError(f"{len(seed_list)} seeds for {idx.size} indices")
+    return idx, np.array([formation_key(s) for s in seed_list], dtype=np.uint64)
 
 @_jit
 def _mix64(z):
