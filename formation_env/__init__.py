@@ -9,6 +9,12 @@ Layers (imports point down only): ``geometry`` -> ``wake`` (ELL) -> ``aircraft``
 
 __version__ = "0.1.0"
 
+from .kernel_cache import check_kernel_cache as _check_kernel_cache  # noqa: E402
+
+# before any compiled kernel loads: a numba cache compiled from other sources of this package is deleted
+# (numba keys each cached function on its own file only; formation_env.kernel_cache)
+_check_kernel_cache()
+
 from . import tasks as _tasks  # noqa: E402,F401  registers every task and its scenario (formation_env.tasks)
 
 

@@ -150,30 +150,15 @@ def air_data_kernel(x, wind, v):
 
 
 @_jit
-def _deriv(x, c, nctrl, wind, alphadot, v, pJ, pCT, pCP, eR, eM, eP, eF, tT, tP, tR, tA, out):
-    u, vv, w = x[0], x[1], x[2]
-    p, q, r = x[3], x[4], x[5]
-    fuel = _clip(x[13], 0.0, v[K_FUELCAP])
-    omega = x[14]
-    de, da, dr, thr = c[0], c[1], c[2], c[3]
+def aero_body(c, nctrl, va, alpha, beta, mach, qbar, ad, pa, qa, ra, v):
+    """Aerodynamic force (N, body axes) and moment (N m, body axes, about the aerodynamic centre) of one
+    aircraft: AeroSim's coefficient build-up in wind axes rotated to body axes (as
+    :func:`.aerodynamics.aero_coefficients` and :func:`.aerodynamics.aero_forces_moments`). c the controls
+    (elevator, aileron, rudder, throttle[, flap]) of which the first ``nctrl`` exist; va, alpha, beta the
+    clipped air data; ad alpha-dot, rad/s; pa, qa, ra the aerodynamic rates (body rates minus the
+    rotational wind), rad/s. Returns (fx, fy, fz, mx, my, mz)."""
+    de, da, dr = c[0], c[1], c[2]
     df = c[4] if nctrl > 4 else 0.0
-    (va_raw, alpha_raw, beta_raw, va, alpha, beta,
-     r00, r01, r02, r10, r11, r12, r20, r21, r22) = air_data_kernel(x, wind, v)
-    alt = -x[12]
-    temp, pres, rho, sound = _atmos(alt, tT, tP, tR, tA)
-    if v[K_GMODEL] == 0.0:
-        g = v[K_G]
-    else:
-        s2 = math.sin(v[K_LAT]) ** 2
-        e2 = 0.0818191908426 ** 2
-        g = (9.7803267714 * (1.0 + 0.00193185138639 * s2) / math.sqrt(1.0 - e2 * s2)
-             - (3.0877e-6 - 0.0044e-6 * s2) * alt + 0.072e-12 * alt * alt)
-    mach = va_raw / sound
-    qbar = 0.5 * rho * va * va
-    pa = p - wind[9]
-    qa = q - wind[10]
-    ra = r - wind[11]
-    ad = alphadot if v[K_ALPHADOT] != 0.0 else 0.0
     c2v = v[K_MAC] / (2.0 * va)
     b2v = v[K_SPAN] / (2.0 * va)
     CL = (v[K_CL0] + v[K_CLA] * alpha + v[K_CLDF] * df + v[K_CLDE] * de
@@ -195,6 +180,53 @@ def _deriv(x, c, nctrl, wind, alphadot, v, pJ, pCT, pCP, eR, eM, eP, eF, tT, tP,
     mx = qs * v[K_SPAN] * Cl
     my = qs * v[K_MAC] * Cm
     mz = qs * v[K_SPAN] * Cn
+    return fx, fy, fz, mx, my, mz
+
+
+@_jit
+def air_density_at(altitude_m, tT, tP, tR, tA):
+    """ISA density (kg/m^3) at ``altitude_m`` from the packed atmosphere table (as the RK4 uses it)."""
+    return _atmos(altitude_m, tT, tP, tR, tA)[2]
+
+
+@_jit
+def aero_force_at(x, c, wind, v, tT, tP, tR, tA):
+    """The aerodynamic force (N, body axes) of one aircraft at state x (16,) with controls c and the
+    wind 12-vector ``wind`` (:func:`air_data_kernel`'s), quasi-steady (alpha-dot 0): what :func:`rk4_batch`
+    applies at that instant apart from the alpha-dot term. Returns (fx, fy, fz)."""
+    (va_raw, alpha_raw, beta_raw, va, alpha, beta,
+     r00, r01, r02, r10, r11, r12, r20, r21, r22) = air_data_kernel(x, wind, v)
+    temp, pres, rho, sound = _atmos(-x[12], tT, tP, tR, tA)
+    fx, fy, fz, mx, my, mz = aero_body(c, c.shape[0], va, alpha, beta, va_raw / sound, 0.5 * rho * va * va, 0.0,
+                                       x[3] - wind[9], x[4] - wind[10], x[5] - wind[11], v)
+    return fx, fy, fz
+
+
+@_jit
+def _deriv(x, c, nctrl, wind, alphadot, v, pJ, pCT, pCP, eR, eM, eP, eF, tT, tP, tR, tA, out):
+    u, vv, w = x[0], x[1], x[2]
+    p, q, r = x[3], x[4], x[5]
+    fuel = _clip(x[13], 0.0, v[K_FUELCAP])
+    omega = x[14]
+    thr = c[3]
+    (va_raw, alpha_raw, beta_raw, va, alpha, beta,
+     r00, r01, r02, r10, r11, r12, r20, r21, r22) = air_data_kernel(x, wind, v)
+    alt = -x[12]
+    temp, pres, rho, sound = _atmos(alt, tT, tP, tR, tA)
+    if v[K_GMODEL] == 0.0:
+        g = v[K_G]
+    else:
+        s2 = math.sin(v[K_LAT]) ** 2
+        e2 = 0.0818191908426 ** 2
+        g = (9.7803267714 * (1.0 + 0.00193185138639 * s2) / math.sqrt(1.0 - e2 * s2)
+             - (3.0877e-6 - 0.0044e-6 * s2) * alt + 0.072e-12 * alt * alt)
+    mach = va_raw / sound
+    qbar = 0.5 * rho * va * va
+    pa = p - wind[9]
+    qa = q - wind[10]
+    ra = r - wind[11]
+    ad = alphadot if v[K_ALPHADOT] != 0.0 else 0.0
+    fx, fy, fz, mx, my, mz = aero_body(c, nctrl, va, alpha, beta, mach, qbar, ad, pa, qa, ra, v)
     # propeller
     om = max(omega, 1.0) if math.isfinite(omega) else omega
     rad = v[K_RPROP]

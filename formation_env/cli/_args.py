@@ -137,7 +137,7 @@ def check_policy_scenario(spec: str, scenario: str, *, allow: bool) -> None:
     """A learned policy flies only the scenario it was trained for: another one is a ValueError naming
     both, unless ``allow`` (--allow-scenario-mismatch) and the two observation sizes agree. Policies whose
     metadata names no scenario, and the baselines, pass."""
-    if spec in ("pid", "pid_formation"):
+    if spec in ("pid", "pid_formation", "station_keeper"):
         return
     trained = trained_scenario(spec)
     if trained is None or trained == scenario:

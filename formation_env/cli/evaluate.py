@@ -31,11 +31,12 @@ def register(sub) -> None:
     from train.evaluation.evaluate import TEST_EPISODES
 
     from ..scenarios import scenario_names
+    from ..sim.config import TURBULENCE_FIELD_ALIASES, TURBULENCE_FIELDS
 
     p = sub.add_parser("evaluate", help="evaluate policies against the PID baselines on held-out seeds (wake + turbulence)")
     p.add_argument("--policy", action="append", required=True,
-                   help="an SB3 .zip, an RLlib checkpoint, 'pid' (thesis FCS) or 'pid_formation' (classical "
-                        "formation-keeping PID); repeat to compare several side by side (policies named "
+                   help="an SB3 .zip, an RLlib checkpoint, 'pid' (thesis FCS), 'pid_formation' (classical "
+                        "formation-keeping PID) or 'station_keeper' (cross-track station keeper); repeat to compare several side by side (policies named "
                         "<name>_seed<k> are also reported as a seed group)")
     p.add_argument("--scenario", required=True, help=f"one of {scenario_names()}")
     p.add_argument("--episodes", type=bounded_int(1, MAX_EPISODES), default=None,
@@ -45,10 +46,13 @@ def register(sub) -> None:
                    help=f"one seed: the first of --episodes consecutive seeds; several: exactly one distinct seed "
                         f"per episode (then --episodes, if given, must match their count) "
                         f"(default {TEST_SEED_BASE}.., never used in training)")
-    p.add_argument("--turbulence", type=_nonneg_float, default=None,
-                   help="Dryden sigma, m/s, every axis (default 1; a task preset's own level, wake_surfing 0.25)")
-    p.add_argument("--turbulence-field", default="frozen", choices=("frozen", "independent"),
-                   help="one frozen field per formation (default) or independent Dryden streams per UAV")
+    p.add_argument("--turbulence", type=_nonneg_float, nargs="+", default=None,
+                   help="turbulence sigma, m/s, every axis (default 1; a task preset's own level, wake_surfing 0.25); "
+                        "several levels (e.g. 0 0.5 1 1.5) evaluate each on the same seeds into OUT/sigma_<level>/ "
+                        "and write the table over the levels (levels.md)")
+    p.add_argument("--turbulence-field", default=None, choices=TURBULENCE_FIELDS + tuple(TURBULENCE_FIELD_ALIASES),
+                   help="von_karman (default) or dryden: one frozen spatial field per formation; lanes (old name "
+                        "frozen): the earlier Cholesky-mixed Dryden lanes; independent: one Dryden stream per UAV")
     p.add_argument("--no-wake", action="store_true", help="switch the ELL wake off (default on)")
     p.add_argument("--benefit", action="store_true", help="also compute the ELL induced-drag saving (slow)")
     p.add_argument("--action-mode", default=None, choices=ACTION_MODES,
@@ -88,8 +92,22 @@ def run(args) -> int:
     for spec in args.policy:
         check_policy_scenario(spec, sc.name, allow=args.allow_scenario_mismatch)
     out = args.out or f"runs/eval-{args.scenario}-{time.strftime('%Y%m%d-%H%M%S')}"
+    levels = args.turbulence or [None]
+    if len(levels) > 1:
+        if len(set(levels)) != len(levels):
+            raise ValueError(f"--turbulence: duplicate level(s) in {levels}")
+        from train.evaluation.levels import evaluate_levels
+
+        res = evaluate_levels(args.policy, scenario=args.scenario, levels=levels, episodes=args.episodes,
+                              seeds=args.seeds, wake=not args.no_wake, compute_benefit=args.benefit,
+                              action_mode=args.action_mode, out_dir=out, overwrite=args.overwrite,
+                              plots=not args.no_plots, duration_s=args.duration, turbulence_field=args.turbulence_field,
+                              log=print, **({} if args.bootstrap_resamples is None else {"n_boot": args.bootstrap_resamples}))
+        print(res["table_markdown"])
+        print(f"wrote {out}/levels.md, levels.json and " + ", ".join(f"sigma_{v:g}/" for v in levels))
+        return 0
     rep = evaluate(args.policy, scenario=args.scenario, episodes=args.episodes, seeds=args.seeds,
-                   turbulence_sigma_mps=args.turbulence, wake=not args.no_wake, compute_benefit=args.benefit,
+                   turbulence_sigma_mps=levels[0], wake=not args.no_wake, compute_benefit=args.benefit,
                    action_mode=args.action_mode, out_dir=out, overwrite=args.overwrite, plots=not args.no_plots,
                    duration_s=args.duration, turbulence_field=args.turbulence_field, log=print,
                    **({} if args.bootstrap_resamples is None else {"n_boot": args.bootstrap_resamples}))

@@ -3,7 +3,8 @@
 animated 3D view (``<scenario>.gif``, with a progress display).
 
 Who flies is ``--policy``: ``pid`` (the thesis FCS on every UAV, the scenario's own deterministic run;
-the default), ``pid_formation`` (the classical formation-keeping PID on the followers), an SB3 ``.zip``
+the default), ``pid_formation`` (the classical formation-keeping PID on the followers), ``station_keeper``
+(the cross-track station keeper on the followers), an SB3 ``.zip``
 (its sidecar JSON / run config.yaml gives the action mode and the default scenario) or an RLlib
 checkpoint directory (needs ray). Learned and ``pid_formation`` policies fly the evaluation episode
 (:func:`train.evaluation.episodes.eval_env_config`: wake on, frozen Dryden turbulence ``--turbulence``) with
@@ -31,14 +32,14 @@ def _nonneg_sigma(text: str) -> float:
 def register(sub) -> None:
     from ..scenarios import scenario_names
 
-    p = sub.add_parser("replay", help="fly one episode (PID, pid_formation, an SB3 zip or an RLlib checkpoint) "
+    p = sub.add_parser("replay", help="fly one episode (PID, pid_formation, station_keeper, an SB3 zip or an RLlib checkpoint) "
                                       "and export it for Tacview (ACMI), as a 3D figure and an animated GIF")
     p.add_argument("--scenario", default=None,
-                   help=f"one of {scenario_names()} (required for pid / pid_formation; a policy zip's default "
+                   help=f"one of {scenario_names()} (required for pid / pid_formation / station_keeper; a policy zip's default "
                         "is the scenario it was trained on)")
-    p.add_argument("--policy", default="pid", metavar="PATH|pid|pid_formation",
+    p.add_argument("--policy", default="pid", metavar="PATH|pid|pid_formation|station_keeper",
                    help="who flies: 'pid' (thesis FCS, default), 'pid_formation' (classical formation-keeping "
-                        "PID), an SB3 .zip or an RLlib checkpoint directory")
+                        "PID), 'station_keeper' (cross-track station keeper), an SB3 .zip or an RLlib checkpoint directory")
     p.add_argument("--action-mode", default=None, choices=("surfaces", "residual", "setpoints"),
                    help="action mode of a zip without sidecar JSON / config.yaml")
     p.add_argument("--seed", type=nonneg_int, default=None,
@@ -148,11 +149,11 @@ def run(args) -> int:
         except ModuleNotFoundError as exc:
             raise ValueError(f"--policy {policy_spec!r} needs the RL extra ({exc}); pip install -e '.[rl]'") from None
         scenario = args.scenario
-        if scenario is None and policy_spec != "pid_formation":
+        if scenario is None and policy_spec not in ("pid_formation", "station_keeper"):
             scenario = trained_scenario(policy_spec)
         if scenario is None:
             raise ValueError(f"--scenario is required with --policy {policy_spec!r}" +
-                             ("" if policy_spec == "pid_formation" else " (no scenario in the policy's metadata)"))
+                             ("" if policy_spec in ("pid_formation", "station_keeper") else " (no scenario in the policy's metadata)"))
         sc = get_scenario(scenario)
         if sc.n_vehicles < 2:
             raise ValueError(f"--scenario {sc.name!r} has one UAV; --policy {policy_spec!r} flies followers "

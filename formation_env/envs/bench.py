@@ -16,7 +16,7 @@ import sys
 import tempfile
 from pathlib import Path
 
-__all__ = ["run_benchmarks", "BATCH_SIZES", "SINGLE_CASES"]
+__all__ = ["run_benchmarks", "BATCH_SIZES", "SINGLE_CASES", "TURBULENCE_CASES"]
 
 PEERS = {
     "PyFlyt 2-aircraft dogfight (joint steps/s)": 408,
@@ -27,6 +27,7 @@ PEERS = {
 SINGLE_CASES = [{"kind": "single", "mode": m, "learning": "all"} for m in ("surfaces", "residual", "setpoints")] + [
     {"kind": "single", "mode": "setpoints", "learning": "followers"}]
 BATCH_SIZES = (1, 8, 15, 16, 32, 256, 1024)
+TURBULENCE_CASES = ("von_karman", "lanes")  # EnvConfig.turbulence_field values measured at B = 256, sigma 1 m/s
 
 
 def _vector_cases(sizes) -> list[dict]:
@@ -79,7 +80,7 @@ def _key(case: dict) -> str:
     if case["kind"] == "single":
         return f"single {case['mode']} learning={case['learning']}"
     return f"vector B={case['formations']} {case['mode']} learning={case['learning']}" + (
-        " benefit" if case.get("benefit") else "")
+        " benefit" if case.get("benefit") else "") + (f" turbulence={case['turbulence']}" if case.get("turbulence") else "")
 
 
 def run_benchmarks(quick: bool = False, baseline: str | None = None, busy: bool = True, log=None) -> dict:
@@ -88,7 +89,10 @@ def run_benchmarks(quick: bool = False, baseline: str | None = None, busy: bool 
     sizes = (1, 16, 256) if quick else BATCH_SIZES
     budget, repeats = (0.2, 2) if quick else (0.6, 3)
     cases = SINGLE_CASES + _vector_cases(sizes) + [{"kind": "vector", "formations": 256, "mode": "setpoints",
-                                                    "learning": "followers", "benefit": True}]
+                                                    "learning": "followers", "benefit": True}] + [
+        # the turbulence models at sigma 1 m/s (their cost against the B = 256 case without turbulence)
+        {"kind": "vector", "formations": 256, "mode": "setpoints", "learning": "followers", "turbulence": field}
+        for field in TURBULENCE_CASES]
     configs = [(2, False), (1, False)] + ([(2, True), (1, True)] if busy else [])
     out: dict = {"case": "formation_keeping, 2 Aerosondes, ELL wake every 50 Hz physics step, 10 Hz decisions",
                  "baseline": baseline, "peers_reported": PEERS, "configurations": {}}
@@ -113,10 +117,14 @@ def run_benchmarks(quick: bool = False, baseline: str | None = None, busy: bool 
         rows = {}
         for i, case in enumerate(cases):
             metric = "physics_steps_per_s" if case["kind"] == "single" else "uav_physics_steps_per_s"
+            if "unsupported" in new[i]:
+                raise RuntimeError(f"bench case {_key(case)}: {new[i]['unsupported']}")
             row = {"new": new[i][metric]}
-            if old is not None:
+            if old is not None and "unsupported" not in old[i]:
                 row["old"] = old[i][metric]
                 row["ratio"] = row["new"] / row["old"]
+            elif old is not None:
+                row["old_unsupported"] = old[i]["unsupported"]
             rows[_key(case)] = row
         out["configurations"][name] = rows
     return out

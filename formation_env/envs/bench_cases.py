@@ -4,7 +4,9 @@ one (``python -m formation_env.envs.bench_cases CASES_JSON`` with the older chec
 
 A case is a dict: ``{"kind": "single", "mode": ..., "learning": ...}`` (PettingZoo parallel env,
 B = 1) or ``{"kind": "vector", "formations": B, "mode": ..., "learning": ..., "wake_update_every": k,
-"benefit": bool}`` (SB3 VecEnv). All cases: formation_keeping, 2 Aerosondes, wake on, 10 Hz
+"benefit": bool, "turbulence": field name, "sigma": m/s}`` (SB3 VecEnv; turbulence of that field at sigma,
+default 1 m/s). A case the code under test cannot build (an older checkout without a newer option) gives
+``{"unsupported": reason}`` instead of figures. All cases: formation_keeping, 2 Aerosondes, wake on, 10 Hz
 decisions (5 physics steps each). Result: the best of ``repeats`` timed runs after a warm-up run
 (best, not median: on a shared 2-core machine the slower runs measure the neighbours).
 """
@@ -65,8 +67,16 @@ def _vector(case: dict, budget_s: float, repeats: int) -> dict:
     opts = {"wake_update_every": case.get("wake_update_every", 1)}
     if case.get("benefit"):
         opts["compute_benefit"] = True
-    venv = FormationVecEnv(n, scenario="formation_keeping", learning=case["learning"], action_mode=case["mode"], seed=0,
-                           **opts)
+    if case.get("turbulence"):
+        from formation_env.envs.config import Randomisation
+
+        opts["turbulence_field"] = case["turbulence"]
+        opts["randomisation"] = Randomisation(turbulence_sigma_mps=case.get("sigma", 1.0))
+    try:
+        venv = FormationVecEnv(n, scenario="formation_keeping", learning=case["learning"], action_mode=case["mode"],
+                               seed=0, **opts)
+    except (TypeError, ValueError) as exc:  # an older checkout without this option
+        return {**case, "unsupported": f"{type(exc).__name__}: {exc}"}
     venv.reset()
     act = np.zeros((venv.num_envs, 4), np.float32)
     decisions, t = _calibrated(lambda: venv.step(act), budget_s, repeats)

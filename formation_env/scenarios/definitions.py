@@ -106,6 +106,9 @@ class Scenario:
     # formation_env.envs.actions) and the reward's ``box`` term charges leaving it.
     safe_box_b: tuple | None = None
     notes: dict = field(default_factory=dict)
+    # how the ELL's wake reaches the 6-DOF unless EnvConfig.wake_coupling says otherwise
+    # (formation_env.wake.coupling.COUPLINGS): the thesis's "effective_wind", or "load_weighted" (the energy tasks)
+    wake_coupling: str = "effective_wind"
 
     def __post_init__(self) -> None:
         if not self.name or not isinstance(self.name, str):
@@ -114,6 +117,10 @@ class Scenario:
             v = getattr(self, fname)
             if not (math.isfinite(v) and v > 0):
                 raise ValueError(f"Scenario.{fname} must be finite and > 0, got {v!r}")
+        from ..wake.coupling import COUPLINGS
+
+        if self.wake_coupling not in COUPLINGS:
+            raise ValueError(f"Scenario.wake_coupling must be one of {tuple(COUPLINGS)}, got {self.wake_coupling!r}")
         if self.slot_frame not in ("leader_demand", "leader_track"):
             raise ValueError(f"Scenario.slot_frame must be 'leader_demand' or 'leader_track', got {self.slot_frame!r}")
         if not all(isinstance(s, SlotSchedule) for s in self.slots):

@@ -15,12 +15,13 @@ import numpy as np
 
 from ..constants import MAX_DURATION_S
 
-__all__ = ["ACTION_MODES", "OBS_MODES", "TURBULENCE_FIELDS", "OPTION_RANGES", "RewardWeights", "Randomisation",
-           "EnvConfig"]
+__all__ = ["ACTION_MODES", "OBS_MODES", "TURBULENCE_FIELDS", "TURBULENCE_FIELD_ALIASES", "OPTION_RANGES", "RewardWeights",
+           "Randomisation", "EnvConfig"]
 
 ACTION_MODES = ("surfaces", "residual", "setpoints")
 OBS_MODES = ("flat", "dict")
-TURBULENCE_FIELDS = ("frozen", "independent")
+TURBULENCE_FIELDS = ("von_karman", "dryden", "lanes", "independent")
+TURBULENCE_FIELD_ALIASES = {"frozen": "lanes"}  # the lanes' name before issue 23 (saved configs and evaluations)
 
 _WEIGHT = (0.0, 1e4, "", "a reward weight: non-negative and bounded, so a decision's reward stays finite "
            "(1e4 x the largest term is far below the float range)")
@@ -62,7 +63,7 @@ OPTION_RANGES: dict[str, tuple[float, float, str, str]] = {
                                       "formation can still make ground along its track (20 m/s: a strong gale)"),
     "Randomisation.crosswind_mps": (0.0, 20.0, "m/s", "as steady_wind_mps: a 20 m/s crosswind crabs a "
                                     "25 m/s UAV by 53 deg"),
-    "Randomisation.turbulence_sigma_mps": (0.0, 10.0, "m/s", "Dryden intensity: MIL-F-8785C severe turbulence "
+    "Randomisation.turbulence_sigma_mps": (0.0, 10.0, "m/s", "turbulence intensity: MIL-F-8785C severe turbulence "
                                            "(exceeded with probability 1e-5) is ~5-7 m/s at low and medium "
                                            "altitude, extreme (1e-6) ~8-10 m/s"),
     "Randomisation.leader_turn_deg": (0.0, 180.0, "deg", "heading change of the leader's manoeuvre: a turn "
@@ -161,8 +162,8 @@ class Randomisation:
     crosswind_mps: maximum steady crosswind, perpendicular to the reference's initial track (uniform in
         +-max; added to the steady wind). A crosswind crabs the formation and turns the wake, which
         trails along the air-relative velocity, against the track (the wake-surfing task's moving optimum).
-    turbulence_sigma_mps: Dryden intensity (m/s, all axes; MIL-F-8785C low-altitude scale lengths); the
-        field is one frozen field per formation or independent per UAV (EnvConfig.turbulence_field).
+    turbulence_sigma_mps: turbulence intensity (m/s, all axes; MIL-F-8785C low-altitude scale lengths); the
+        model is EnvConfig.turbulence_field (one frozen von Karman field per formation by default).
     leader_turn_deg, leader_climb_m, leader_speed_mps: amplitude of one random manoeuvre of the
         reference (heading change, altitude change, speed change), each drawn uniformly in +-amplitude
         and started at a random time in the first half of the episode.
@@ -204,10 +205,19 @@ class EnvConfig:
         the benefit weight is > 0; compiled into the decision step).
     wake_update_every: physics steps between ELL solves (1: every 50 Hz step, the default; 2: 25 Hz,
         about twice as fast; the induced wind is held in between).
-    turbulence_field: "frozen" (default): one frozen (Taylor) Dryden field per formation that every
-        UAV samples at its own position, so neighbours feel nearly the same gusts
-        (:mod:`formation_env.atmosphere.frozen_field`); "independent": each UAV its own Dryden
-        stream (uncorrelated gusts, for robustness studies).
+    turbulence_field: the turbulence model (with ``randomisation.turbulence_sigma_mps`` > 0):
+        "von_karman" (default) or "dryden": one frozen spatial field per formation (random Fourier modes,
+        isotropic MIL-F-8785C / MIL-HDBK-1797 spectra), carried with the steady wind, that every UAV samples
+        at its own position, with rotational gusts over the span and to the tail
+        (:mod:`formation_env.atmosphere.spectral_field`); "lanes": the earlier approximation of a frozen
+        Dryden field (one Dryden lane per UAV, Cholesky-mixed, Taylor-delayed; no rotational gusts;
+        :mod:`formation_env.atmosphere.frozen_field`), also accepted under its old name "frozen";
+        "independent": each UAV its own Dryden stream (uncorrelated gusts, for robustness studies).
+    wake_coupling: how the ELL's wake reaches the 6-DOF (:mod:`formation_env.wake.coupling`): "effective_wind"
+        (the thesis's uniform span average, Eqs. 4.4-4.7) or "load_weighted" (lift-matched ELL wing and
+        load-weighted wind: the 6-DOF's lift, drag and rolling-moment increments are the ELL's); None (default):
+        the scenario's (``load_weighted`` in the energy tasks close_formation and wake_surfing, the thesis's
+        elsewhere).
     """
 
     scenario: object = "formation_keeping"  # a scenario name or a formation_env.scenarios.Scenario
@@ -220,7 +230,8 @@ class EnvConfig:
     duration_s: float | None = None
     compute_benefit: bool = False
     wake_update_every: int = 1
-    turbulence_field: str = "frozen"
+    turbulence_field: str = "von_karman"
+    wake_coupling: str | None = None
     reward: RewardWeights = field(default_factory=RewardWeights)
     randomisation: Randomisation = field(default_factory=Randomisation)
 
@@ -230,11 +241,15 @@ class EnvConfig:
         if not isinstance(self.scenario, Scenario) and (not isinstance(self.scenario, str)
                                                         or self.scenario not in scenario_names()):
             raise ValueError(f"EnvConfig: unknown scenario {self.scenario!r}; available: {scenario_names()}")
-        for name, choices in (("action_mode", ACTION_MODES), ("obs_mode", OBS_MODES),
-                              ("turbulence_field", TURBULENCE_FIELDS)):
+        for name, choices in (("action_mode", ACTION_MODES), ("obs_mode", OBS_MODES)):
             value = getattr(self, name)
             if not isinstance(value, str) or value not in choices:
                 raise ValueError(f"EnvConfig: {name} must be one of {choices}, got {value!r}")
+        field_name = self.turbulence_field
+        if not isinstance(field_name, str) or (field_name not in TURBULENCE_FIELDS
+                                               and field_name not in TURBULENCE_FIELD_ALIASES):
+            raise ValueError(f"EnvConfig: turbulence_field must be one of {TURBULENCE_FIELDS} (or 'frozen', the old name "
+                             f"of 'lanes'), got {field_name!r}")
         sc = self.scenario if isinstance(self.scenario, Scenario) else get_scenario(self.scenario)
         physics_hz = 1.0 / sc.dt
         hz = _in_range("EnvConfig", "control_hz", self.control_hz)
@@ -255,6 +270,12 @@ class EnvConfig:
             raise ValueError(f"EnvConfig: wake must be True, False or None (the scenario's default), got {self.wake!r}")
         if self.wake is not None:
             object.__setattr__(self, "wake", bool(self.wake))
+        if self.wake_coupling is not None:
+            from ..wake.coupling import COUPLINGS
+
+            if not isinstance(self.wake_coupling, str) or self.wake_coupling not in COUPLINGS:
+                raise ValueError(f"EnvConfig: wake_coupling must be None or one of {tuple(COUPLINGS)}, "
+                                 f"got {self.wake_coupling!r}")
         if not isinstance(self.compute_benefit, (bool, np.bool_)):
             raise ValueError(f"EnvConfig: compute_benefit must be True or False, got {self.compute_benefit!r}")
         object.__setattr__(self, "compute_benefit", bool(self.compute_benefit))

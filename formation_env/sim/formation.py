@@ -27,11 +27,13 @@ import numpy as np
 from ..aircraft import AEROSONDE, AerosondeParams
 from ..aircraft.state import POS, QUAT
 from ..frames import dcm_body_to_ned_from_quaternion, euler_from_quaternion
-from ..geometry import aerosonde
+from ..geometry import Vehicle, aerosonde
 from ..wake import FormationState, WakeModel
+from ..wake.coupling import COUPLINGS, lift_matched_vehicle
 
 
-__all__ = ["WakeConfig", "ell_state_from_aircraft", "wake_model_for", "wing_origin_body"]
+__all__ = ["WakeConfig", "ell_state_from_aircraft", "wake_model_for", "wake_vehicle", "resolve_coupling",
+           "wing_origin_body"]
 
 
 @dataclass(frozen=True)
@@ -46,8 +48,14 @@ class WakeConfig:
     rotational: str = "lstsq"
     viscous_aic: bool = True
     update_every: int = 1  # physics steps between ELL evaluations (induced wind held in between)
+    # how the wake reaches the 6-DOF (formation_env.wake.coupling.COUPLINGS): "effective_wind" (the thesis's)
+    # or "load_weighted" (consistent with the ELL's loads; the energy tasks'); None: EnvConfig.wake_coupling,
+    # else the scenario's (resolve_coupling)
+    coupling: str | None = None
 
     def __post_init__(self) -> None:
+        if self.coupling is not None and self.coupling not in COUPLINGS:
+            raise ValueError(f"WakeConfig: coupling must be None or one of {tuple(COUPLINGS)}, got {self.coupling!r}")
         if not isinstance(self.update_every, int) or self.update_every < 1:
             raise ValueError(f"WakeConfig: update_every must be an integer >= 1, got {self.update_every!r}")
         if not isinstance(self.nseg, int) or self.nseg < 1:
@@ -77,10 +85,31 @@ def wing_origin_body(params: AerosondeParams = AEROSONDE) -> np.ndarray:
     return np.asarray(params.r_ac_body, float) - np.asarray(params.cg_gross_body, float)
 
 
-def wake_model_for(wake: WakeConfig, n_vehicles: int) -> WakeModel | None:
-    """The joint ELL model of ``n_vehicles`` Aerosondes as ``wake`` configures it (None: wake off or one UAV)."""
+def resolve_coupling(wake: WakeConfig, config=None, scenario=None) -> str:
+    """The wake coupling a simulation flies: ``wake.coupling`` if set, else ``config.wake_coupling`` (an
+    EnvConfig) if set, else ``scenario.wake_coupling``, else the thesis's "effective_wind"."""
+    for source in (wake.coupling, getattr(config, "wake_coupling", None), getattr(scenario, "wake_coupling", None)):
+        if source is not None:
+            return source
+    return "effective_wind"
+
+
+def wake_vehicle(wake: WakeConfig, coupling: str | None = None) -> Vehicle:
+    """The Aerosonde the ELL models as ``wake`` configures it: Table 6.1's wing (and tailplane), with the
+    ``load_weighted`` coupling lift-matched (its wing at the 6-DOF's zero-lift angle,
+    :func:`formation_env.wake.coupling.lift_matched_vehicle`). ``coupling`` None: ``wake.coupling``."""
+    coupling = resolve_coupling(wake) if coupling is None else coupling
+    if coupling not in COUPLINGS:
+        raise ValueError(f"wake_vehicle: coupling must be one of {tuple(COUPLINGS)}, got {coupling!r}")
+    vehicle = aerosonde(nseg=wake.nseg, tailplane=wake.tailplane)
+    return lift_matched_vehicle(vehicle, AEROSONDE) if coupling == "load_weighted" else vehicle
+
+
+def wake_model_for(wake: WakeConfig, n_vehicles: int, coupling: str | None = None) -> WakeModel | None:
+    """The joint ELL model of ``n_vehicles`` Aerosondes as ``wake`` configures it (None: wake off or one UAV);
+    ``coupling`` as :func:`wake_vehicle`'s."""
     if not wake.enabled or n_vehicles < 2:
         return None
-    vehicle = aerosonde(nseg=wake.nseg, tailplane=wake.tailplane)
+    vehicle = wake_vehicle(wake, coupling)
     return WakeModel([vehicle] * n_vehicles, core=wake.core, eval_points=wake.eval_points, rotational=wake.rotational,
                      viscous_aic=wake.viscous_aic)

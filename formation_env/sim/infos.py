@@ -9,6 +9,8 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from ..aircraft.state import POS
+from .energy import ENERGY_COLUMNS, N_ENERGY
+from .energy import energy_account as _energy_account
 from .observe import REWARD_TERMS
 
 if TYPE_CHECKING:
@@ -56,6 +58,24 @@ class InfoArrays:
         return s.aircraft[..., POS] - s.position_demand
 
     @property
+    def slot_error_track_m(self) -> np.ndarray:
+        """(B, V, 3) position minus demanded position in the slot frame, m: along the track (x forward), lateral
+        (y starboard), vertical (z down), unweighted. The slot frame is the scenario's: vehicle 0's demanded
+        track (``slot_frame="leader_demand"``) or its measured ground track (``"leader_track"``), as the step's
+        slot error and safe box use it. Non-finite states read as 0."""
+        from ..frames import ned_to_track_frame
+
+        sim, s = self._sim, self._sim.state
+        if sim.scenario.slot_frame == "leader_demand":
+            ref = s.velocity_demand[:, 0]
+        else:
+            ref = sim.velocity_ned()[:, 0]
+        with np.errstate(invalid="ignore"):
+            chi = np.arctan2(ref[:, 1], ref[:, 0])
+            err = ned_to_track_frame(s.aircraft[..., POS] - s.position_demand, np.where(np.isfinite(chi), chi, 0.0)[:, None])
+        return np.where(np.isfinite(err), err, 0.0)
+
+    @property
     def min_separation_m(self) -> np.ndarray:
         """(B, V) distance to the nearest other UAV, m (inf alone)."""
         s, out = self._sim.state, self._sim.output
@@ -80,6 +100,12 @@ class InfoArrays:
     def gust_ned_mps(self) -> np.ndarray:
         """(B, V, 3) turbulence at each UAV, m/s NED."""
         return self._sim.state.gust_ned
+
+    @property
+    def gust_omega_body_rad_s(self) -> np.ndarray:
+        """(B, V, 3) rotational gusts at each UAV, rad/s body, the 6-DOF's convention (p_g, -q_g, -r_g; zero for
+        the lanes and independent streams, which have none)."""
+        return self._sim.state.gust_omega_body
 
     @property
     def steady_wind_ned_mps(self) -> np.ndarray:
@@ -115,6 +141,36 @@ class InfoArrays:
     def induced_drag_saving(self) -> np.ndarray:
         """(B, V) induced-drag saving against the same UAV alone (0 unless the benefit is on)."""
         return self._sim.output.saving
+
+    @property
+    def energy_account(self) -> np.ndarray:
+        """(B, V, N_ENERGY) the energy account at the current state (:mod:`formation_env.sim.energy`,
+        columns :data:`~formation_env.sim.energy.ENERGY_COLUMNS`): the 6-DOF's drag along the flight path
+        alone and in formation, the ELL's induced-drag saving and isolated induced drag (N), and the ELL's and
+        the 6-DOF's drag saving in % of the drag alone. Computed when read (one ELL solve per formation, with
+        its coupling, and each UAV's isolated solve); zeros without wake."""
+        sim, s = self._sim, self._sim.state
+        out = np.zeros(s.aircraft.shape[:2] + (N_ENERGY,))
+        if sim.wake_model is None:
+            return out
+        p = sim.params
+        omega = getattr(s, "gust_omega_body", None)
+        omega = np.zeros_like(s.gust_ned) if omega is None else omega
+        _energy_account(p.wake, p.wake_alone, p.coupling, p.aircraft, s.aircraft, np.ascontiguousarray(s.command),
+                        np.ascontiguousarray(sim.ambient_wind()), np.ascontiguousarray(omega), out)
+        return out
+
+    @property
+    def drag_saving_pct_ell(self) -> np.ndarray:
+        """(B, V) the ELL's predicted reduction of each UAV's total drag at its current state, % of its
+        total drag alone (:attr:`energy_account`)."""
+        return self.energy_account[..., ENERGY_COLUMNS.index("drag_saving_pct_ell")]
+
+    @property
+    def drag_saving_pct_6dof(self) -> np.ndarray:
+        """(B, V) the reduction of the drag along the flight path the 6-DOF applies, formation against the
+        same state and controls without the wake, % (:attr:`energy_account`)."""
+        return self.energy_account[..., ENERGY_COLUMNS.index("drag_saving_pct_6dof")]
 
     @property
     def box_depth_m(self) -> np.ndarray:

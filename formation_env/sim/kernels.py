@@ -21,7 +21,7 @@ import numpy as np
 from ..aircraft.kernels import air_data_kernel, rk4_batch
 from ..aircraft.state import POS_D, POS_E, POS_N
 from ..frames import quaternion_dcm_terms
-from ..wake.arrays import evaluate_formation
+from ..wake.coupling import EFFECTIVE_WIND, CouplingArrays, coupled_wind
 
 _jit = nb.njit(cache=True, error_model="numpy")
 
@@ -103,13 +103,16 @@ def _clear_wake(held_wind, held_omega, gamma):
 
 
 @_jit
-def step_one(state, controls, ambient, turb, held_wind, held_omega, gamma, update_wake, wake_on, wake, aircraft, dt,
-             out_state, out_status):
-    """One formation (V aircraft) by one step dt: ELL effective wind when ``update_wake`` (held
+def step_one(state, controls, ambient, turb, turb_omega, held_wind, held_omega, gamma, update_wake, wake_on, wake,
+             coupling, aircraft, dt, out_state, out_status):
+    """One formation (V aircraft) by one step dt: ELL induced wind when ``update_wake`` (held
     otherwise; held_wind/held_omega/gamma are updated in place), RK4, envelope status.
 
-    state (V, 16); controls (V, 4|5); ambient (V, 3) NED and turb (V, 3) body wind, m/s; ``wake`` a
-    :class:`~formation_env.wake.arrays.WakeArrays`, ``aircraft`` an
+    state (V, 16); controls (V, 4|5); ambient (V, 3) NED and turb (V, 3) body wind, m/s; turb_omega (V, 3)
+    rotational gusts, rad/s body, added to the held induced rotational wind; ``wake`` a
+    :class:`~formation_env.wake.arrays.WakeArrays`, ``coupling`` a
+    :class:`~formation_env.wake.coupling.CouplingArrays` (the thesis's effective wind or the load-weighted
+    wind, :func:`~formation_env.wake.coupling.coupled_wind`), ``aircraft`` an
     :class:`~formation_env.sim.params.AircraftArrays`. A formation with an aircraft outside the
     envelope gets no wake solve and zero induced wind (its episode is ending)."""
     ac = aircraft
@@ -135,8 +138,8 @@ def step_one(state, controls, ambient, turb, held_wind, held_omega, gamma, updat
             alpha = np.empty(nv)
             beta = np.empty(nv)
             ell_inputs(state, ambient, wake.wing_origin_body, pos, euler, speed, alpha, beta)
-            evaluate_formation(wake, pos, euler, speed, alpha, beta, gamma, np.empty((wake.panel_left_knot.shape[0], 3)),
-                               held_wind, np.empty((nv, 3)), held_omega, np.empty((nv, 3)))
+            coupled_wind(wake, coupling, pos, euler, speed, alpha, beta, gamma, np.empty((wake.panel_left_knot.shape[0], 3)),
+                         held_wind, np.empty((nv, 3)), held_omega, np.empty((nv, 3)))
             # The ELL stays bounded at any separation (the overlap core); should a solve still come
             # out non-finite (degenerate input), the formation flies without induced wind this step
             # rather than feeding NaN to the aircraft.
@@ -152,7 +155,7 @@ def step_one(state, controls, ambient, turb, held_wind, held_omega, gamma, updat
     for a in range(nv):
         for i in range(3):
             wind[a, 6 + i] = held_wind[a, i]
-            wind[a, 9 + i] = held_omega[a, i]
+            wind[a, 9 + i] = held_omega[a, i] + turb_omega[a, i]
     new = rk4_batch(state, controls, wind, dt, ac.scalars, ac.prop_J, ac.prop_CT, ac.prop_CP, ac.engine_rpm,
                     ac.engine_map, ac.engine_power, ac.engine_fuel, ac.atm_T, ac.atm_P, ac.atm_rho, ac.atm_a)
     for a in range(nv):
@@ -164,10 +167,14 @@ def step_one(state, controls, ambient, turb, held_wind, held_omega, gamma, updat
 @nb.njit(cache=True, nogil=True, error_model="numpy")
 def step_range(state, controls, ambient, turb, held_wind, held_omega, gamma, update_wake, wake_on, wake, aircraft, dt,
                out_state, out_status, start, stop):
-    """:func:`step_one` for formations start..stop-1 of a batch (B, V, ...); releases the GIL."""
+    """:func:`step_one` for formations start..stop-1 of a batch (B, V, ...) with the thesis's effective-wind
+    coupling; releases the GIL."""
+    no_omega = np.zeros((state.shape[1], 3))  # no rotational gusts in this harness
+    thesis = CouplingArrays(mode=EFFECTIVE_WIND, panel_length_m=np.zeros(0), roll_weight=np.zeros(0),
+                            normal_b=np.zeros((0, 3)), cl_beta=0.0, cl_p=1.0, cl_r=0.0, span_m=1.0)
     for b in range(start, stop):
-        step_one(state[b], controls[b], ambient[b], turb[b], held_wind[b], held_omega[b], gamma[b], update_wake, wake_on,
-                 wake, aircraft, dt, out_state[b], out_status[b])
+        step_one(state[b], controls[b], ambient[b], turb[b], no_omega, held_wind[b], held_omega[b], gamma[b], update_wake,
+                 wake_on, wake, thesis, aircraft, dt, out_state[b], out_status[b])
 
 
 @_jit

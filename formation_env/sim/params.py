@@ -8,6 +8,7 @@ angles rad, frames NED (earth) and body (x forward, y starboard, z down).
 
 from __future__ import annotations
 
+import functools
 import math
 from typing import NamedTuple
 
@@ -18,14 +19,18 @@ from ..aircraft.envelope import DEFAULT_LIMITS
 from ..aircraft.kernels import pack as pack_aircraft
 from ..atmosphere.dryden import DrydenConfig
 from ..atmosphere.frozen_field import FrozenFieldParams, frozen_field_params
+from ..atmosphere.spectral_field import FIELD_KINDS, SpectralFieldParams, spectral_field_params
 from ..constants import AEROSONDE_SPAN_M, RESIDUAL_SCALE, SETPOINT_POSITION_SCALE_M, SETPOINT_SPEED_SCALE_MPS
 from ..control.law import FCSParams
+from ..geometry.presets import AEROSONDE_TAIL_ARM_M
 from ..wake.arrays import WakeArrays, wake_arrays
+from ..wake.coupling import CouplingArrays
 from .kernels import pack_limits
 
 __all__ = ["AircraftArrays", "WakeArrays", "ScenarioArrays", "ActionParams", "RewardParams", "StepParams",
            "ACTION_MODE_CODES", "wake_arrays", "scenario_arrays", "SURFACES", "RESIDUAL", "SETPOINTS", "safe_box_arrays",
            "setpoint_ranges", "setpoint_speed_range", "slot_error_axes", "surface_scale", "RESIDUAL_SCALE",
+           "TurbulenceParams", "TURBULENCE_CODES", "turbulence_params",
            "SETPOINT_POSITION_SCALE_M", "SETPOINT_SPEED_SCALE_MPS"]
 
 SURFACES, RESIDUAL, SETPOINTS = 0, 1, 2
@@ -140,6 +145,17 @@ class RewardParams(NamedTuple):
                    slot_error_axes=slot_error_axes(scenario))
 
 
+class TurbulenceParams(NamedTuple):
+    """Both turbulence models of an environment (``StepParams.turbulence`` picks one)."""
+
+    lanes: FrozenFieldParams  # lanes and independent streams (formation_env.atmosphere.frozen_field)
+    modes: SpectralFieldParams  # the spectral field (formation_env.atmosphere.spectral_field)
+
+
+#: ``EnvConfig.turbulence_field`` -> ``StepParams.turbulence`` when sigma > 0 ("frozen": the lanes' old name)
+TURBULENCE_CODES = {"von_karman": 3, "dryden": 3, "lanes": 1, "frozen": 1, "independent": 2}
+
+
 class StepParams(NamedTuple):
     """Everything constant of one environment (B formations share it)."""
 
@@ -148,7 +164,7 @@ class StepParams(NamedTuple):
     episode_steps: int  # physics steps until the time limit
     wake_on: bool
     wake_update_every: int  # physics steps between ELL solves
-    turbulence: int  # 0 off, 1 frozen field, 2 independent streams per UAV
+    turbulence: int  # TURBULENCE_CODES: 0 off, 1 lanes, 2 independent streams per UAV, 3 spectral field
     benefit_on: bool  # compute the induced-drag saving each decision
     aircraft: AircraftArrays
     wake: WakeArrays
@@ -157,8 +173,9 @@ class StepParams(NamedTuple):
     fcs: FCSParams
     action: ActionParams
     reward: RewardParams
-    field: FrozenFieldParams
+    field: TurbulenceParams
     trim_airspeed_mps: float
+    coupling: CouplingArrays  # how the wake reaches the 6-DOF (formation_env.wake.coupling)
 
 
 def surface_scale(limit_rad: float) -> np.ndarray:
@@ -239,9 +256,24 @@ def setpoint_speed_range(sc) -> float:
     return SETPOINT_SPEED_SCALE_MPS if sc.safe_box_b is None else 2.0 * SETPOINT_SPEED_SCALE_MPS
 
 
-def turbulence_params(sc, sigma_mps: float) -> FrozenFieldParams:
-    """The Dryden field of the scenario (MIL-F-8785C low-altitude scale lengths) at ``sigma_mps``
-    (any value > 0 when turbulence is off: the arrays must exist for the kernel)."""
+def turbulence_params(sc, sigma_mps: float, field: str = "lanes") -> TurbulenceParams:
+    """The turbulence of the scenario at ``sigma_mps`` (MIL-F-8785C low-altitude scale lengths at its
+    altitude; any value > 0 when turbulence is off: the arrays must exist for the kernel): the lanes
+    (:mod:`formation_env.atmosphere.frozen_field`) and the spectral field of ``field`` ("von_karman" or
+    "dryden"; the lanes' names build a von Karman one that is never sampled). The spectral field is
+    isotropic: with ``field`` spectral and the scale lengths unequal (below 1000 ft) it is a ValueError."""
     scales = DrydenConfig.low_altitude(sc.altitude_m, 1.0, sc.airspeed_mps, sc.dt).length_scale_m
     s = sigma_mps if sigma_mps > 0 else 1.0
-    return frozen_field_params((s,) * 3, scales, sc.airspeed_mps, sc.dt)
+    kind = field if field in FIELD_KINDS else "von_karman"
+    if field in FIELD_KINDS and sigma_mps > 0 and max(scales) - min(scales) > 1e-9 * max(scales):
+        raise ValueError(f"turbulence_field={field!r} is isotropic, but the MIL-F-8785C low-altitude scale lengths at "
+                         f"{sc.altitude_m:g} m are {tuple(round(x, 1) for x in scales)} m (equal from 1000 ft = 304.8 m "
+                         "up); use turbulence_field='lanes' there")
+    return TurbulenceParams(lanes=frozen_field_params((s,) * 3, scales, sc.airspeed_mps, sc.dt),
+                            modes=_spectral_params(kind, s, float(scales[2]), float(sc.dt)))
+
+
+@functools.lru_cache(maxsize=16)
+def _spectral_params(kind: str, sigma: float, length: float, dt: float) -> SpectralFieldParams:
+    # the shell tables take ~0.1 s of quadrature: built once per (spectrum, sigma, L, dt) in a process
+    return spectral_field_params(kind, sigma, length, dt, span_m=AEROSONDE_SPAN_M, tail_arm_m=AEROSONDE_TAIL_ARM_M)

@@ -29,19 +29,20 @@ import numpy as np
 from ..aircraft import AEROSONDE, trim
 from ..aircraft.state import POS
 from ..atmosphere.frozen_field import frozen_field_reset
+from ..atmosphere.spectral_field import spectral_field_reset
 from ..control import PIDFlightControl
 from ..control.law import fcs_params
 from ..control.observation import ned_to_track_frame, track_frame_offset_to_ned
-from ..geometry import aerosonde
 from ..scenarios import AEROSONDE_SPAN_M, Scenario, get_scenario
 from ..wake import WakeModel
+from ..wake.coupling import coupling_arrays
 from ..wake.loads import isolated_model
 from .config import EnvConfig
-from .formation import WakeConfig, wake_model_for, wing_origin_body
+from .formation import WakeConfig, resolve_coupling, wake_model_for, wake_vehicle, wing_origin_body
 from .infos import INFO_REWARD_KEYS, InfoArrays, finite_values, reward_info_key, separation_each
 from .observe import REWARD_TERMS, observation_size
-from .params import (ActionParams, RewardParams, StepParams, aircraft_arrays, scenario_arrays, turbulence_params,
-                     wake_arrays)
+from .params import (TURBULENCE_CODES, ActionParams, RewardParams, StepParams, aircraft_arrays, scenario_arrays,
+                     turbulence_params, wake_arrays)
 from .state import StepOutput, init_output, init_state
 from .step import observe, refresh, step
 from .warmup import ensure_warm
@@ -102,8 +103,9 @@ class Simulation:
         self.surface_limit_rad = float(fc.surface_limit_rad)
         self.throttle_limits = tuple(float(x) for x in fc.throttle_limits)
         wc = wake_config if wake_config is not None else WakeConfig()
-        vehicle = aerosonde(nseg=wc.nseg, tailplane=wc.tailplane)
-        self.wake_model = wake_model_for(wc, v) if self.wake else None
+        self.wake_coupling = resolve_coupling(wc, config, sc)  # how the wake reaches the 6-DOF
+        vehicle = wake_vehicle(wc, self.wake_coupling)
+        self.wake_model = wake_model_for(wc, v, self.wake_coupling) if self.wake else None
         self.wing_origin_body = wing_origin_body(AEROSONDE)
         lattice = self.wake_model or WakeModel([vehicle])  # the kernel needs arrays even without wake
         alone = isolated_model(vehicle, wc.core, wc.eval_points, wc.rotational, lattice.kinematic_viscosity,
@@ -113,12 +115,13 @@ class Simulation:
         self.params = StepParams(
             dt_s=float(sc.dt), substeps=self.substeps, episode_steps=self.n_steps,
             wake_on=self.wake_model is not None, wake_update_every=int(config.wake_update_every),
-            turbulence=0 if sigma <= 0 else (1 if config.turbulence_field == "frozen" else 2),
+            turbulence=0 if sigma <= 0 else TURBULENCE_CODES[config.turbulence_field],
             benefit_on=bool((config.compute_benefit or w.benefit > 0) and self.wake_model is not None),
             aircraft=aircraft_arrays(), wake=wake_arrays(lattice, self.wing_origin_body),
             wake_alone=wake_arrays(alone, self.wing_origin_body), scenario=scenario_arrays(sc, rnd.any_manoeuvre),
             fcs=fcs_params(fc, sc.dt), action=self._action_params(config), reward=self._reward_params(config),
-            field=turbulence_params(sc, sigma), trim_airspeed_mps=float(sc.airspeed_mps))
+            field=turbulence_params(sc, sigma, config.turbulence_field), trim_airspeed_mps=float(sc.airspeed_mps),
+            coupling=coupling_arrays(lattice, self.wake_coupling, AEROSONDE))
         self.state = init_state(self.batch_size, v, lattice.n_panels, self.params.field)
         self.output: StepOutput = init_output(self.batch_size, v, observation_size(v))
         self.obs_size = observation_size(v)
@@ -216,10 +219,14 @@ class Simulation:
             s.episode_return[i] = 0.0
             s.episode_decisions[i] = 0
             s.gust_ned[i] = 0.0
+            s.gust_omega_body[i] = 0.0
         if wind is not None:
             s.steady_wind[idx] = wind
-        if field_seeds:
-            frozen_field_reset(self.params.field, s.field, idx, field_seeds)
+        if field_seeds:  # the field of the configured model from each episode's seed (the same draw for every model)
+            if self.params.turbulence == TURBULENCE_CODES["von_karman"]:
+                spectral_field_reset(self.params.field.modes, s.modes, idx, field_seeds)
+            else:
+                frozen_field_reset(self.params.field.lanes, s.field, idx, field_seeds)
         refresh(self.params, s, idx, self.output)
         # the slot error the step measures (formation_env.sim.observe.slot_error): slot-frame components of
         # position minus demand, weighted by the scenario's axes (along-track only with a safe box); the
@@ -301,6 +308,7 @@ class Simulation:
                 "induced_omega_body_rad_s": s.induced_omega_body[i, v].copy(),
                 "fuel_kg": float(s.aircraft[i, v, 13]),
                 "gust_ned_mps": s.gust_ned[i, v].copy(),
+                "gust_omega_body_rad_s": s.gust_omega_body[i, v].copy(),
                 "status": int(s.status[i, v]),
                 "collision": bool(out.collided[i]),
                 "crashed": bool(out.crashed[i, v]),

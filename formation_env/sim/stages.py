@@ -25,8 +25,9 @@ import numba as nb
 import numpy as np
 
 from ..aircraft.kernels import air_data_kernel
-from ..aircraft.state import POS_D, POS_E, POS_N
+from ..aircraft.state import POS_D, POS_E, POS_N, QUAT
 from ..atmosphere.frozen_field import N_STREAMS_PER_LANE, advance_field_one, sample_field_one
+from ..atmosphere.spectral_field_kernels import sample_modes_one
 from ..control.law import N_CSTATE, fcs_update
 from ..frames import quaternion_dcm_terms, track_to_ned_xy
 from ..wake.arrays import evaluate_formation
@@ -48,6 +49,7 @@ _jit = nb.njit(cache=True, error_model="numpy")
 # (~100), which cost ~3.5 us per 2-UAV formation physics step (+30 % without the wake; measured against
 # the single-function decide_one of dffc3cc: 13.8 against 10.6 us, inlined 10.0 us, issue 21).
 _jit_inline = nb.njit(cache=True, error_model="numpy", inline="always")
+QUAT0 = QUAT.start  # the attitude quaternion's first column (numba slices by integer constants)
 # A compiled call increfs and decrefs every array of its struct arguments (StepParams holds ~70,
 # SimState ~25): a stage not inlined takes the smallest part of the parameters it needs.
 
@@ -141,29 +143,39 @@ def demands(scenario, s, b, t, vel):
 
 
 @_jit
-def sample_turbulence(turbulence, field, s, b, fs):
-    """Turbulence (V, 3) NED at each UAV of formation b now, into ``s.gust_ned[b]``: the frozen field
-    read at the UAVs' positions (cross-correlated, transport-delayed; ``turbulence`` 1), or
-    independent lanes (each UAV its own stream, no delay; 2). Non-finite values (a diverged UAV,
-    episode ending) read as 0. ``field`` the :class:`FrozenFieldParams`, fs a :class:`FieldScratch`."""
+def sample_turbulence(turbulence, field, s, b, fs, t):
+    """Turbulence of formation b at time t (s; the UAVs' current positions are there then), into
+    ``s.gust_ned[b]`` (V, 3) m/s NED and ``s.gust_omega_body[b]`` (V, 3) rad/s body: ``turbulence`` 3 the
+    spectral field (:mod:`formation_env.atmosphere.spectral_field`) at each UAV's CG, frozen in the air
+    moving with the steady wind, with its rotational gusts over the span and to the tail; 1 the lanes
+    (cross-correlated, transport-delayed); 2 independent lanes (each UAV its own stream, no delay); the
+    lanes have no rotational gusts (zero). Non-finite values (a diverged UAV, episode ending) read as 0.
+    ``field`` the :class:`~formation_env.sim.params.TurbulenceParams`, fs a :class:`FieldScratch`."""
     nv = s.gust_ned.shape[1]
     chi = math.atan2(s.velocity_demand[b, 0, 1], s.velocity_demand[b, 0, 0])
     if not math.isfinite(chi):
         chi = 0.0
+    if turbulence == 3:
+        x = s.aircraft[b]
+        sample_modes_one(field.modes, s.modes, b, x[:, POS_N:POS_D + 1], x[:, QUAT0:QUAT0 + 4], t, s.steady_wind[b], chi,
+                         s.gust_ned[b], s.gust_omega_body[b])
+        return
     if turbulence == 1:
         pos = s.aircraft[:, :, POS_N:POS_D + 1]
-        sample_field_one(field, s.field, b, pos, chi, s.gust_ned, fs.along, fs.cross, fs.down, fs.slot0, fs.slot1,
-                         fs.frac, fs.corr, fs.lo, fs.gust)
+        sample_field_one(field.lanes, s.field, b, pos, chi, s.gust_ned, fs.along, fs.cross, fs.down, fs.slot0,
+                         fs.slot1, fs.frac, fs.corr, fs.lo, fs.gust)
     else:
         head = s.field.head[b]
         cs, sn = math.cos(chi), math.sin(chi)
+        sig = field.lanes.sigma_mps
         for i in range(nv):
-            u = field.sigma_mps[0] * s.field.ring[b, head, 0, i]
-            v = field.sigma_mps[1] * s.field.ring[b, head, 1, i]
+            u = sig[0] * s.field.ring[b, head, 0, i]
+            v = sig[1] * s.field.ring[b, head, 1, i]
             s.gust_ned[b, i, 0], s.gust_ned[b, i, 1] = track_to_ned_xy(cs, sn, u, v)
-            s.gust_ned[b, i, 2] = field.sigma_mps[2] * s.field.ring[b, head, 2, i]
+            s.gust_ned[b, i, 2] = sig[2] * s.field.ring[b, head, 2, i]
     for i in range(nv):
         for k in range(3):
+            s.gust_omega_body[b, i, k] = 0.0
             if not math.isfinite(s.gust_ned[b, i, k]):
                 s.gust_ned[b, i, k] = 0.0
 
@@ -239,8 +251,8 @@ def control(p, s, b, actions, sc):
 
 @_jit_inline
 def physics_and_events(p, s, b, last_substep, sc):
-    """One dt of formation b: ELL effective wind (every ``wake_update_every``-th step), RK4 and the
-    envelope (:func:`formation_env.sim.kernels.step_one`); the new state, command and status into
+    """One dt of formation b: ELL induced wind of the coupling ``p.coupling`` (every ``wake_update_every``-th
+    step), RK4 and the envelope (:func:`formation_env.sim.kernels.step_one`); the new state, command and status into
     ``s``, the status bits accumulated in ``sc.status_any``, the pre-step state kept in
     ``sc.pre_state``. On the ``last_substep`` with the benefit on, the ELL poses are kept in ``sc``;
     returns whether that substep's ELL solve is there to read the formation benefit off."""
@@ -250,10 +262,12 @@ def physics_and_events(p, s, b, last_substep, sc):
                    sc.ell_alpha, sc.ell_beta)
         solved = True
     sc.pre_state[:, :] = s.aircraft[b]
-    # turbulence is in the ambient wind (NED), so the body-axis turbulence input is zero
+    # turbulence is in the ambient wind (NED), so the body-axis turbulence input is zero; its rotational
+    # gusts are added to the ELL's induced rotational wind (body axes) inside step_one
     update = s.step[b] % p.wake_update_every == 0
-    step_one(s.aircraft[b], sc.command, sc.ambient, sc.zero_turb, s.induced_wind_ned[b], s.induced_omega_body[b],
-             s.circulation[b], update, p.wake_on, p.wake, p.aircraft, p.dt_s, sc.new_state, sc.status)
+    step_one(s.aircraft[b], sc.command, sc.ambient, sc.zero_turb, s.gust_omega_body[b], s.induced_wind_ned[b],
+             s.induced_omega_body[b], s.circulation[b], update, p.wake_on, p.wake, p.coupling, p.aircraft, p.dt_s,
+             sc.new_state, sc.status)
     if solved:  # step_one solved unless the formation was outside the envelope (gamma zeroed)
         solved = False
         for k in range(s.circulation.shape[1]):
@@ -271,11 +285,14 @@ def physics_and_events(p, s, b, last_substep, sc):
 
 @_jit_inline
 def advance_turbulence(turbulence, field, s, b, fs):
-    """The turbulence field of formation b one step forward and sampled at the new positions
-    (nothing when ``turbulence`` is 0). fs: a :class:`FieldScratch`."""
+    """The turbulence of formation b one step forward and sampled at the new positions (called after
+    the physics step, before the step counter moves on: the new positions are at (step + 1) dt); the
+    lanes advance their filters, the spectral field is frozen and only moves with the air. Nothing when
+    ``turbulence`` is 0. fs: a :class:`FieldScratch`."""
     if turbulence != 0:
-        advance_field_one(field, s.field, b, fs.normals)
-        sample_turbulence(turbulence, field, s, b, fs)
+        if turbulence != 3:
+            advance_field_one(field.lanes, s.field, b, fs.normals)
+        sample_turbulence(turbulence, field, s, b, fs, (s.step[b] + 1) * field.modes.dt_s)
 
 
 @_jit_inline

@@ -2,8 +2,8 @@
 (:class:`StepOutput`): everything that carries physics between calls of
 :func:`formation_env.sim.step.step` lives here, nothing in hidden attributes.
 
-Shapes: B formations, V vehicles, N ELL panels (all vehicles), R turbulence ring slots, D the
-observation size. Frames: NED earth, body x forward / y starboard / z down.
+Shapes: B formations, V vehicles, N ELL panels (all vehicles), R turbulence ring slots (lanes), M
+spectral turbulence modes, D the observation size. Frames: NED earth, body x forward / y starboard / z down.
 """
 
 from __future__ import annotations
@@ -14,6 +14,7 @@ import numpy as np
 
 from ..aircraft.state import N_STATES
 from ..atmosphere.frozen_field import FrozenFieldState, frozen_field_init
+from ..atmosphere.spectral_field import SpectralFieldState, spectral_field_init
 from ..control.law import N_CSTATE
 from .observe import REWARD_TERMS
 
@@ -35,7 +36,9 @@ class SimState(NamedTuple):
     manoeuvre: np.ndarray  # (B, 4) leader manoeuvre: start s, heading change rad, altitude change m, speed change m/s
     reference_position: np.ndarray  # (B, 3) integrated manoeuvring reference path position, m NED
     gust_ned: np.ndarray  # (B, V, 3) turbulence at each UAV now, m/s NED
-    field: FrozenFieldState  # the formation's turbulence field (frozen or independent lanes)
+    gust_omega_body: np.ndarray  # (B, V, 3) rotational gusts at each UAV now (p_g, -q_g, -r_g), rad/s body
+    field: FrozenFieldState  # the lanes of the formation's turbulence (lanes or independent streams)
+    modes: SpectralFieldState  # the formation's spectral turbulence field (von Karman or Dryden modes)
     status: np.ndarray  # (B, V) int64 envelope status bits after the last physics step
     previous_action: np.ndarray  # (B, V, 4) the agent's action of the last decision (0 for PID-flown UAVs)
     previous_error: np.ndarray  # (B, V) distance from the slot at the last decision, m
@@ -62,7 +65,7 @@ class StepOutput(NamedTuple):
 
 def init_state(batch_size: int, n_vehicles: int, n_panels: int, field_params) -> SimState:
     """Zeroed state of ``batch_size`` formations of ``n_vehicles`` UAVs (``n_panels`` ELL panels in all,
-    the turbulence field of ``field_params``); a reset fills it."""
+    the turbulence of ``field_params``, a :class:`~formation_env.sim.params.TurbulenceParams`); a reset fills it."""
     b, v = batch_size, n_vehicles
     z3 = lambda: np.zeros((b, v, 3))  # noqa: E731
     return SimState(
@@ -70,7 +73,8 @@ def init_state(batch_size: int, n_vehicles: int, n_panels: int, field_params) ->
         step=np.zeros(b, dtype=np.int64), induced_wind_ned=z3(), induced_omega_body=z3(),
         circulation=np.zeros((b, max(n_panels, 1))), position_demand=z3(), velocity_demand=z3(), slot_jitter=z3(),
         steady_wind=np.zeros((b, 3)), manoeuvre=np.zeros((b, 4)), reference_position=np.zeros((b, 3)), gust_ned=z3(),
-        field=frozen_field_init(field_params, b, v), status=np.zeros((b, v), dtype=np.int64),
+        gust_omega_body=z3(), field=frozen_field_init(field_params.lanes, b, v),
+        modes=spectral_field_init(field_params.modes, b), status=np.zeros((b, v), dtype=np.int64),
         previous_action=np.zeros((b, v, 4)), previous_error=np.zeros((b, v)), episode_return=np.zeros((b, v)),
         episode_decisions=np.zeros(b, dtype=np.int64))
 
@@ -87,8 +91,9 @@ def init_output(batch_size: int, n_vehicles: int, obs_size: int) -> StepOutput:
 
 
 def _copy_field(x):
-    return FrozenFieldState(**{name: a.copy() for name, a in x._asdict().items()}) if isinstance(x, FrozenFieldState) \
-        else x.copy()
+    if isinstance(x, (FrozenFieldState, SpectralFieldState)):
+        return type(x)(**{name: a.copy() for name, a in x._asdict().items()})
+    return x.copy()
 
 
 def copy_state(state: SimState) -> SimState:

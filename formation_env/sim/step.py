@@ -64,7 +64,7 @@ def refresh_formation(p, s, b):
     nv = s.aircraft.shape[1]
     demands(p.scenario, s, b, s.step[b] * p.dt_s, np.empty((nv, 3)))
     if p.turbulence != 0:
-        sample_turbulence(p.turbulence, p.field, s, b, field_scratch(nv))
+        sample_turbulence(p.turbulence, p.field, s, b, field_scratch(nv), s.step[b] * p.dt_s)
 
 
 @nb.njit(cache=True, error_model="numpy")

@@ -31,8 +31,9 @@ def _newest_source_mtime() -> float:
 
 
 def is_warm() -> bool:
-    """True when a complete warm-up ran after the newest change of any source file (numba's cache is keyed
-    by the source files' modification times, so an edit makes it cold again)."""
+    """True when a complete warm-up ran after the newest change of any source file (an edit makes the cache
+    cold again: numba recompiles the edited file's functions, and :mod:`formation_env.kernel_cache` deletes
+    the cached callers in other files)."""
     try:
         return _STAMP.stat().st_mtime >= _newest_source_mtime()
     except OSError:
@@ -68,6 +69,11 @@ def _decision_step() -> None:
     sim = Simulation(cfg, batch_size=2)
     sim.reset(seeds=[0, 1])
     sim.step(np.zeros((2, sim.n_agents, 4)))
+    # an energy task: the load-weighted coupling and the energy account of its infos (issue 23)
+    energy = Simulation(EnvConfig(scenario="close_formation", compute_benefit=True, duration_s=0.2), batch_size=1)
+    energy.reset(seeds=[0])
+    energy.step(np.zeros((1, energy.n_agents, 4)))
+    energy.info.energy_account  # noqa: B018  (computed when read: compiles the energy kernels)
     solo = Simulation(EnvConfig(scenario="tracking", duration_s=0.2), batch_size=1)
     solo.reset(seeds=[0])
     solo.step(np.zeros((1, solo.n_agents, 4)))

@@ -9,9 +9,10 @@ and metrics where it has them, and the names of the baselines it is judged again
 Importing this package registers every task (and its scenario) in order; ``formation_env`` imports it.
 """
 
-from .base import TASKS, Task, get_task, gym_ids, make_config, register_task, task_names, task_options
+from .base import TASKS, Task, get_task, gym_ids, make_config, register_task, task_for_scenario, task_names, task_options
 from . import thesis  # noqa: F401  (registers)
 from . import close_formation  # noqa: F401
 from . import wake_surfing  # noqa: F401
 
-__all__ = ["Task", "TASKS", "get_task", "task_names", "register_task", "task_options", "make_config", "gym_ids"]
+__all__ = ["Task", "TASKS", "get_task", "task_names", "register_task", "task_options", "task_for_scenario", "make_config",
+           "gym_ids"]

@@ -9,13 +9,15 @@ under :mod:`formation_env.tasks` and calling :func:`register_task`; its Gymnasiu
 
 from __future__ import annotations
 
+import importlib
 from collections.abc import Callable
 from dataclasses import dataclass, field
 
 from ..scenarios import Scenario, get_scenario, register_scenario
 from ..sim.config import EnvConfig
 
-__all__ = ["Task", "register_task", "get_task", "task_names", "TASKS", "task_options", "make_config", "gym_ids"]
+__all__ = ["Task", "register_task", "get_task", "task_names", "TASKS", "task_options", "task_for_scenario", "make_config",
+           "gym_ids"]
 
 
 @dataclass(frozen=True)
@@ -43,6 +45,16 @@ class Task:
 
     def get_scenario(self) -> Scenario:
         return get_scenario(self.scenario_name)
+
+    def optimum_saving(self) -> float | None:
+        """The follower's induced-drag saving at the reference optimum of the task's allowed region in calm
+        air (the denominator of the evaluations' ``harvest_ratio``): the reference's ``optimum_saving()``;
+        None for a task without a reference or whose reference has no such optimum."""
+        if self.reference is None:
+            return None
+        ref = importlib.import_module(self.reference) if isinstance(self.reference, str) else self.reference
+        fn = getattr(ref, "optimum_saving", None)
+        return None if fn is None else float(fn())
 
 
 TASKS: dict[str, Task] = {}
@@ -79,6 +91,14 @@ def task_options(scenario) -> dict:
         if t.scenario_name == scenario:
             return dict(t.options)
     return {}
+
+
+def task_for_scenario(scenario) -> Task | None:
+    """The registered task flown on ``scenario`` (a name), None if no task poses it."""
+    for t in TASKS.values():
+        if isinstance(scenario, str) and t.scenario_name == scenario:
+            return t
+    return None
 
 
 def gym_ids() -> dict[str, tuple[str, int]]:

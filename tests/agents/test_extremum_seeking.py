@@ -26,9 +26,12 @@ def test_converges_on_the_optimum_in_calm_air():
     """No wind, no turbulence, no manoeuvre: from the thesis slot (saving ~0.15) the seeker climbs to the
     best point it may hold. The optimum sits on the box's 0.1 b floor; the seeker's centre may come no
     closer than the floor plus its dither amplitude and margin (so that it stays in the box), so its
-    target is the constrained optimum on that line: within 120 s its vertical centre reaches the limit,
-    and over the last 60 s of 180 its mean centre has a static saving (ELL map) within 3 % of the best
-    on that line, laterally within 0.1 span of the optimum, never leaving the box."""
+    target is the constrained optimum on that line: from 130 s on its vertical centre stays within 0.01 span
+    (3 cm, a tenth of the scale on which the saving changes) of the limit, and over the last 60 s of 180 its
+    mean centre has a static saving (ELL map) within 3 % of the best on that line, laterally within 0.1 span
+    of the optimum, never leaving the box. (With the energy tasks' load-weighted coupling the lift-matched
+    wake is ~1.7x stronger than the thesis's flat-wing one: the seeker first reaches the limit at 121 s, not
+    99 s, and holds 0.003 span above it, measured; with the thesis coupling 99 s and 0.0015 span.)"""
     from formation_env.tasks.close_formation.optimum import slot_savings
 
     cfg = make_config(scenario="wake_surfing", learning="followers", randomisation=Randomisation(), duration_s=180.0)
@@ -51,7 +54,7 @@ def test_converges_on_the_optimum_in_calm_air():
     y_opt, _, s_opt = reference_optimum(0.0)
     saving = np.asarray(ep["series"]["saving"])
     assert saving[:50].mean() < 0.5 * s_opt  # it starts far from the optimum
-    assert np.all(centres[1200:, 1] < z_limit + 0.005)  # at the floor limit from 120 s on
+    assert np.all(centres[1300:, 1] < z_limit + 0.01)  # at the floor limit from 130 s on
     y_line = np.linspace(0.7, 1.3, 61)
     line = slot_savings(np.stack([np.full(61, -2.0), y_line, np.full(61, z_limit)], -1))[:, 1]
     mean_centre = centres[-600:].mean(axis=0)

@@ -78,6 +78,8 @@ CASES: list[tuple[list[str], str]] = [
     (["evaluate", "--policy", "pid", "--scenario", "formation_keeping", "--seeds", "1" + "0" * 30], "1" + "0" * 30),
     (["evaluate", "--policy", "pid", "--scenario", "formation_keeping", "--turbulence", "-1"], "'-1'"),
     (["evaluate", "--policy", "pid", "--scenario", "formation_keeping", "--turbulence", "inf"], "'inf'"),
+    (["evaluate", "--policy", "pid", "--scenario", "formation_keeping", "--turbulence", "0", "1", "0"], "duplicate"),
+    (["evaluate", "--policy", "pid", "--scenario", "formation_keeping", "--turbulence", "0", "-2"], "'-2'"),
     (["evaluate", "--policy", "pid", "--scenario", "formation_keeping", "--duration", "1e9"], "'1e9'"),
     (["evaluate", "--policy", "pid", "--scenario", "formation_keeping", "--duration", "0"], "'0'"),
     (["evaluate", "--policy", "pid", "--scenario", "formation_keeping", "--duration", "0.001"], "0.001"),

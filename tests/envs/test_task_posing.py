@@ -35,7 +35,7 @@ def _gust_series(field, seed=3, steps=300):
 
 
 def test_frozen_field_is_the_default_and_neighbours_feel_nearly_the_same_gusts():
-    assert EnvConfig().turbulence_field == "frozen"
+    assert EnvConfig().turbulence_field == "von_karman"  # issue 23: the spectral field; "frozen" = "lanes"
     follower, leader = _gust_series("frozen")
     assert follower.shape == (300, 3) and np.all(np.isfinite(follower))
     # RMS of the gust difference / sigma: ~0.26-0.29 at the thesis slot (a little more as the follower

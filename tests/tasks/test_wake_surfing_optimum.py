@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 
 from formation_env.scenarios import get_scenario
+from formation_env.sim.formation import WakeConfig
 from formation_env.tasks.close_formation import optimum as cfm
 from formation_env.tasks.wake_surfing import optimum as ws
 
@@ -133,8 +134,10 @@ def test_crosswind_optimum_holds_in_the_compiled_env(env_saving, w_e):
     assert sv[5] < sv[0] - 0.01  # and so does 0.15 b further below
     assert sv[3] < sv[0] - 0.15  # the wrong-sign rotation: far off the optimum
     assert sv[4] < sv[0] - 0.1  # not rotating at all (the calm slot) is also much worse
-    # the module's rotated calm-air savings are the env's at any offset, not only the optimum
-    np.testing.assert_allclose(ws.saving_in_crosswind(np.array(pts, float), c), sv, atol=1e-5)
+    # the module's rotated calm-air savings are the env's at any offset, not only the optimum (with the env's
+    # ELL model: the task flies the load-weighted coupling's lift-matched wing)
+    wake = WakeConfig(coupling=get_scenario("wake_surfing").wake_coupling)
+    np.testing.assert_allclose(ws.saving_in_crosswind(np.array(pts, float), c, wake=wake), sv, atol=1e-5)
 
 
 # ---------------------------------------------------------------- the cache

@@ -69,6 +69,8 @@ SCORES = {s.key: s for s in (
     Score("rms_slot_error_m", "RMS slot error (m)", False, log_scale=True),
     Score("reconfig_success", "reconfiguration success (0/1)", True, ("mean",)),
     Score("saving_ratio", "harvest ratio (saving / reference optimum)", True),
+    # close formation (issue 24): the mean saving over the calm-air saving at the task's reference optimum
+    Score("harvest_ratio", "harvest ratio (saving / calm-air optimum)", True),
 )}
 
 

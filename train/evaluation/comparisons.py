@@ -15,6 +15,9 @@ __all__ = ["compare_episodes", "comparisons", "seed_groups", "group_report", "BA
 
 BASELINES = ("pid", "pid_formation")   # the classical controllers every other policy is compared with
 _SEED_NAME = re.compile(r"^(?P<group>.+)_seed(?P<seed>\d+)$")
+# the close-formation metrics compared when the episodes have them (issue 24): metric -> lower is better
+_PRECISION_KEYS = {"rms_lateral_m": True, "rms_vertical_m": True, "harvest_ratio": False}
+_PAIRED_KEYS = ("rms_slot_error_m", "reconfig_success", *_PRECISION_KEYS)
 
 
 def _column(episodes: list[dict], key: str) -> np.ndarray:
@@ -31,19 +34,23 @@ def compare_episodes(baseline: list[dict], candidate: list[dict] | None = None, 
                      candidate_values: dict[str, np.ndarray] | None = None, n_boot: int = N_BOOT, seed: int = 0) -> dict:
     """Paired comparison of a candidate with a baseline on the same episodes: ``rms_slot_error_m``
     (:func:`train.evaluation.stats.paired_comparison`, reduction = baseline - candidate in m) and, when the
-    episodes have it, ``reconfig_success`` (:func:`train.evaluation.stats.paired_rate_difference`, candidate -
-    baseline). The candidate is its episode list or, for a seed group, ``candidate_values``: the
+    episodes have them, ``reconfig_success`` (:func:`train.evaluation.stats.paired_rate_difference`, candidate -
+    baseline), ``rms_lateral_m`` / ``rms_vertical_m`` (reductions, m) and ``harvest_ratio`` (higher is better:
+    its "reduction" baseline - candidate is negative where the candidate harvests more). The candidate is its episode list or, for a seed group, ``candidate_values``: the
     per-episode values (seed-averaged) keyed by metric."""
     if candidate is not None:
         _check_paired(baseline, candidate)
-        candidate_values = {k: _column(candidate, k) for k in ("rms_slot_error_m", "reconfig_success")
-                            if k in candidate[0]}
+        candidate_values = {k: _column(candidate, k) for k in _PAIRED_KEYS if k in candidate[0]}
     assert candidate_values is not None
     out = {"rms_slot_error_m": paired_comparison(_column(baseline, "rms_slot_error_m"),
                                                  candidate_values["rms_slot_error_m"], n_boot=n_boot, seed=seed)}
     if "reconfig_success" in baseline[0] and "reconfig_success" in candidate_values:
         out["reconfig_success"] = paired_rate_difference(_column(baseline, "reconfig_success"),
                                                          candidate_values["reconfig_success"], n_boot=n_boot, seed=seed)
+    for key, lower in _PRECISION_KEYS.items():
+        if key in baseline[0] and key in candidate_values:
+            out[key] = paired_comparison(_column(baseline, key), candidate_values[key], n_boot=n_boot, seed=seed,
+                                         lower_is_better=lower)
     return out
 
 
@@ -105,7 +112,7 @@ def group_report(members: dict[str, dict], baselines: dict[str, list[dict]], *, 
     keys = [k for k in _scalar_metrics(members[names[0]]["summary"]) if all(k in members[n]["summary"] for n in names)]
     summary = {k: seed_spread([members[n]["summary"][k] for n in names]) for k in keys}
     per_episode = {k: np.mean([_column(members[n]["episodes"], k) for n in names], axis=0)
-                   for k in ("rms_slot_error_m", "reconfig_success") if k in first[0]}
+                   for k in _PAIRED_KEYS if k in first[0]}
     comps = {b: compare_episodes(eps, candidate_values=per_episode, n_boot=n_boot, seed=seed) for b, eps in baselines.items()}
     return {"policies": names, "n_seeds": len(names), "summary": summary,
             "per_episode": {k: v.tolist() for k, v in per_episode.items()}, "comparisons": comps}

@@ -9,9 +9,11 @@ from collections.abc import Sequence
 import numpy as np
 
 from formation_env.rollout import Recorder
+from formation_env.sim.energy import ENERGY_COLUMNS
 from formation_env.tasks.wake_surfing.metrics import longest_run
 
-__all__ = ["eval_env_config", "run_episodes", "longest_run", "SPAN_M", "SUCCESS_WINDOW_S", "FAILURE_SLOT_ERROR_M"]
+__all__ = ["eval_env_config", "run_episodes", "reference_saving", "longest_run", "SPAN_M", "SUCCESS_WINDOW_S",
+           "FAILURE_SLOT_ERROR_M"]
 
 from formation_env.constants import AEROSONDE_SPAN_M as SPAN_M  # noqa: E402
 SUCCESS_WINDOW_S = 5.0
@@ -24,8 +26,9 @@ DEFAULT_TURBULENCE_SIGMA_MPS = 1.0  # the test set's Dryden level (scenarios wit
 
 def eval_env_config(scenario: str, action_mode: str, *, turbulence_sigma_mps: float | None = None, wake: bool = True,
                     control_hz: float = 10.0, compute_benefit: bool = False, duration_s: float | None = None,
-                    turbulence_field: str = "frozen"):
-    """The evaluation episodes' EnvConfig: the thesis scenario with wake and Dryden turbulence on. With
+                    turbulence_field: str | None = None):
+    """The evaluation episodes' EnvConfig: the thesis scenario with wake and turbulence on (``turbulence_field``
+    None: the env's default field, one frozen von Karman field per formation). With
     its defaults (sigma 1 m/s, wake on, the scenario's duration, no other randomisation) it is the test
     set's distribution, which the training's validation (model selection) also uses. A scenario with a
     task preset (:mod:`formation_env.tasks`: ``wake_surfing``) keeps its preset's randomisation and
@@ -33,6 +36,8 @@ def eval_env_config(scenario: str, action_mode: str, *, turbulence_sigma_mps: fl
     from formation_env.envs.config import EnvConfig, Randomisation
     from formation_env.tasks import task_options
 
+    if turbulence_field is None:
+        turbulence_field = EnvConfig.turbulence_field  # the dataclass default
     task = task_options(scenario)
     if task:  # a task preset (wake_surfing): its randomisation, reward and benefit, with this turbulence
         rnd = task.pop("randomisation")
@@ -50,6 +55,16 @@ def eval_env_config(scenario: str, action_mode: str, *, turbulence_sigma_mps: fl
                      randomisation=Randomisation(turbulence_sigma_mps=turbulence_sigma_mps))
 
 
+def reference_saving(scenario_name: str) -> float | None:
+    """The denominator of ``harvest_ratio``: the follower's induced-drag saving at the reference optimum of the
+    allowed region of the task flown on ``scenario_name``, in calm air (:meth:`formation_env.tasks.Task.optimum_saving`);
+    None where the scenario's task has none (then no harvest ratio is reported)."""
+    from formation_env.tasks import task_for_scenario
+
+    task = task_for_scenario(scenario_name)
+    return None if task is None else task.optimum_saving()
+
+
 def _moving_slot(scenario) -> bool:
     return any(len(s.keyframes) > 1 for s in scenario.slots)
 
@@ -64,7 +79,9 @@ class _EpisodeSeries(Recorder):
         sc = sim.scenario
         self.agents = list(sim.agent_indices)
         b, a_n = sim.batch_size, len(self.agents)
-        self.series = {k: [] for k in ("t", "err", "sep", "act", "cmd", "saving", "final_err", "box")}
+        self.series = {k: [] for k in ("t", "err", "trk", "sep", "act", "cmd", "saving", "final_err", "box", "ell",
+                                       "sixdof")}
+        self.energy = sim.wake_model is not None  # the energy account (formation_env.sim.energy) needs the wake
         self.returns = np.zeros(b)
         self.fuel0 = sim.aircraft[:, :, 13].copy()
         self.fuel_end = self.fuel0.copy()
@@ -82,11 +99,16 @@ class _EpisodeSeries(Recorder):
             sep = min_separation_m(sim.aircraft)[:, agents]
         series["t"].append(k / self.hz)
         series["err"].append(np.where(alive[:, None], err, np.nan))
+        series["trk"].append(np.where(alive[:, None, None], out.info.slot_error_track_m[:, agents], np.nan))
         series["sep"].append(np.where(alive[:, None], sep, np.nan))
         series["act"].append(np.where(alive[:, None, None], act_now, np.nan))
         series["cmd"].append(np.where(alive[:, None, None], sim.commands[:, agents], np.nan))
         series["saving"].append(np.where(alive[:, None], out.info.induced_drag_saving[:, agents], np.nan))
         series["box"].append(np.where(alive[:, None], out.info.box_depth_m[:, agents], np.nan))
+        if self.energy:  # the ELL's and the 6-DOF's drag saving at the flown state, % of the drag alone
+            acc = out.info.energy_account[:, agents]
+            for key, col in (("ell", "drag_saving_pct_ell"), ("sixdof", "drag_saving_pct_6dof")):
+                series[key].append(np.where(alive[:, None], acc[..., ENERGY_COLUMNS.index(col)], np.nan))
         if self.moving:
             fe = np.full((b, a_n), np.nan)
             vd0 = sim.velocity_demand[:, 0]
@@ -122,14 +144,17 @@ def run_episodes(policy, config, seeds: Sequence[int], *, keep_series: bool = Fa
     has_box = sc.safe_box_b is not None
     series, returns, fuel0, fuel_end, moving = rec.series, rec.returns, rec.fuel0, rec.fuel_end, rec.moving
     end_step, collided, crashed = res.decisions, res.collided, res.crashed
+    optimum = reference_saving(sc.name)
     trim = sim.trim.controls[0, :4]
     t = np.asarray(series["t"])
     err = np.stack(series["err"])          # (T, B, A)
+    trk = np.stack(series["trk"])          # (T, B, A, 3) slot frame: along-track, lateral, vertical
     sep = np.stack(series["sep"])
     acts = np.stack(series["act"])         # (T, B, A, 4)
     cmd = np.stack(series["cmd"])
     saving = np.stack(series["saving"])
     box = np.stack(series["box"])
+    energy = {key: np.stack(series[key]) for key in ("ell", "sixdof")} if rec.energy else {}
     final_err = np.stack(series["final_err"]) if moving else None
     schedule_start = sc.slots[0].keyframes[1][0] if moving else 0.0
     out = []
@@ -158,8 +183,18 @@ def run_episodes(policy, config, seeds: Sequence[int], *, keep_series: bool = Fa
             "leader_fuel_kg": float(fuel0[i, 0] - fuel_end[i, 0]),
         }
         m["fuel_saving_pct"] = float(100.0 * (1.0 - m["fuel_used_kg"] / m["leader_fuel_kg"])) if m["leader_fuel_kg"] > 0 else float("nan")
+        # the slot-frame components (the saving lives across the track): the time not flown charged
+        # FAILURE_SLOT_ERROR_M on every axis, as the 3D error is
+        for j, key in enumerate(("rms_along_track_m", "rms_lateral_m", "rms_vertical_m")):
+            c = np.concatenate([trk[:n, i, :, j].ravel(), np.full(missing * a_n, FAILURE_SLOT_ERROR_M)])
+            m[key] = float(np.sqrt(np.mean(c ** 2)))
         if sim.benefit_enabled:  # no saving for the time not flown
             m["induced_drag_saving"] = float(np.sum(saving[:n, i]) / ((n + missing) * a_n))
+            if optimum is not None:
+                m["harvest_ratio"] = m["induced_drag_saving"] / optimum
+        if rec.energy:  # the energy account's means over the decisions, the time not flown as no saving
+            for key, name in (("ell", "drag_saving_pct_ell"), ("sixdof", "drag_saving_pct_6dof")):
+                m[name] = float(np.sum(energy[key][:n, i]) / ((n + missing) * a_n))
         if has_box:  # the time not flown counts as outside the box
             out_of_box = np.concatenate([box[:n, i] > 0.0, np.ones((missing, a_n), bool)])  # (T, A)
             m["box_outside_frac"] = float(np.mean(out_of_box))

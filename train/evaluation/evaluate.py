@@ -86,7 +86,7 @@ def evaluate(policies: Sequence[str], *, scenario: str, episodes: int = TEST_EPI
              turbulence_sigma_mps: float | None = None, wake: bool = True, compute_benefit: bool = False,
              action_mode: str | None = None, out_dir: str | Path | None = None, overwrite: bool = False,
              plots: bool = True, duration_s: float | None = None, groups: dict[str, Sequence[str]] | None = None,
-             turbulence_field: str = "frozen",
+             turbulence_field: str | None = None,
              n_boot: int = N_BOOT, log: Callable[[str], None] | None = None) -> dict:
     """Evaluate ``policies`` ("pid", "pid_formation", SB3 zips or RLlib checkpoints) on the same held-out
     episodes (``episodes`` seeds from ``TEST_SEED_BASE``, or from ``seeds[0]``, or exactly ``seeds`` when
@@ -97,7 +97,9 @@ def evaluate(policies: Sequence[str], *, scenario: str, episodes: int = TEST_EPI
     (:func:`comparisons`: every policy against each baseline evaluated with it), ``groups`` (seed groups:
     policies ``<name>_seed<k>`` and the ``groups`` argument {group: [policy names]}, see
     :func:`group_report`), ``statistics`` (how the intervals were computed) and the markdown tables."""
-    from formation_env.scenarios import scenario_names
+    from formation_env.envs.config import EnvConfig
+    from formation_env.scenarios import get_scenario, scenario_names
+    from formation_env.sim.formation import WakeConfig, resolve_coupling
 
     if scenario not in scenario_names():
         raise ValueError(f"unknown scenario {scenario!r}; available: {scenario_names()}")
@@ -165,8 +167,10 @@ def evaluate(policies: Sequence[str], *, scenario: str, episodes: int = TEST_EPI
                              "episodes": eps}
         if log:
             lo, hi = summ["rms_slot_error_m_ci"]
-            log(f"{pol.name}: RMS slot error {summ['rms_slot_error_m']:.3f} m [{lo:.3f}, {hi:.3f}], "
-                f"collisions {summ['collisions']}/{len(seeds)}"
+            log(f"{pol.name}: RMS slot error {summ['rms_slot_error_m']:.3f} m [{lo:.3f}, {hi:.3f}] (along / lateral / "
+                f"vertical {summ['rms_along_track_m']:.3f} / {summ['rms_lateral_m']:.3f} / {summ['rms_vertical_m']:.3f} m), "
+                + (f"harvest ratio {summ['harvest_ratio']:.3f}, " if "harvest_ratio" in summ else "")
+                + f"collisions {summ['collisions']}/{len(seeds)}"
                 + (f", reconfiguration success {summ['reconfig_success_rate']:.2f}" if "reconfig_success_rate" in summ else "")
                 + f" ({summ['wall_s']:.1f} s)")
     episodes_by_name = {n: r["episodes"] for n, r in results.items()}
@@ -176,7 +180,8 @@ def evaluate(policies: Sequence[str], *, scenario: str, episodes: int = TEST_EPI
     group_reports = {g: group_report({m: results[m] for m in members}, base_eps, n_boot=n_boot)
                      for g, members in group_spec.items()}
     report = {"scenario": scenario, "seeds": seeds, "wake": wake, "turbulence_sigma_mps": turbulence_sigma_mps,
-              "turbulence_field": turbulence_field,
+              "turbulence_field": EnvConfig.turbulence_field if turbulence_field is None else turbulence_field,
+              "wake_coupling": resolve_coupling(WakeConfig(), scenario=get_scenario(scenario)),
               "policies": {n: {k: v for k, v in r.items()} for n, r in results.items()},
               "baselines": baselines, "comparisons": comps, "groups": group_reports,
               "statistics": {"confidence": 0.95, "n_boot": n_boot, "bootstrap_seed": 0,
@@ -202,7 +207,8 @@ def evaluate(policies: Sequence[str], *, scenario: str, episodes: int = TEST_EPI
                 e["series"].pop("t")
         atomic_write_json(out / "results.json", slim, overwrite=overwrite)
         head = (f"# Evaluation: {scenario}\n\n{len(seeds)} held-out episodes (seeds {seeds[0]}..{seeds[-1]}), "
-                f"wake {'on' if wake else 'off'}, Dryden turbulence sigma {turbulence_sigma_mps:g} m/s. Intervals: 95 %, "
+                f"wake {'on' if wake else 'off'} ({report['wake_coupling']} coupling), turbulence {report['turbulence_field']} "
+                f"sigma {turbulence_sigma_mps:g} m/s. Intervals: 95 %, "
                 f"percentile bootstrap over episodes (scipy.stats.bootstrap, {n_boot} resamples, seed 0) for errors, "
                 f"Wilson for rates; rliable aggregates over training seeds x episodes.\n\n")
         text = head + report["table_markdown"]

@@ -1,5 +1,5 @@
 """Loading the policies to evaluate: ``"pid"`` (the thesis FCS, zero residual), ``"pid_formation"``
-(the classical formation-keeping baseline), an SB3 zip or an RLlib checkpoint / run directory."""
+(the classical formation-keeping baseline), ``"station_keeper"`` (the cross-track station keeper), an SB3 zip or an RLlib checkpoint / run directory."""
 
 from __future__ import annotations
 
@@ -33,6 +33,19 @@ def _pid_formation_policy() -> EvalPolicy:
     return EvalPolicy("pid_formation", str(agent.action_mode), agent.act, float(agent.control_hz), reset=agent.reset)
 
 
+def _station_keeper_policy() -> EvalPolicy:
+    """The cross-track station keeper (``agents.station_keeper.StationKeeper``), imported only here."""
+    try:
+        from agents.station_keeper import StationKeeper
+    except ModuleNotFoundError as exc:
+        if exc.name not in ("agents.station_keeper", "agents"):
+            raise
+        raise ValueError("policy 'station_keeper' needs agents/station_keeper.py, which this checkout does not have") from None
+
+    agent = StationKeeper()
+    return EvalPolicy("station_keeper", str(agent.action_mode), agent.act, float(agent.control_hz), reset=agent.reset)
+
+
 def policy_metadata(path: Path) -> dict:
     """Metadata of a policy zip: its sidecar ``<stem>.json``, else its run's ``config.yaml``."""
     side = path.with_suffix(".json")
@@ -52,13 +65,15 @@ def policy_metadata(path: Path) -> dict:
 
 def load_policy(spec: str, *, action_mode: str | None = None, name: str | None = None, device: str = "cpu") -> EvalPolicy:
     """``"pid"`` (the thesis FCS: zero residual), ``"pid_formation"`` (the classical formation-keeping
-    baseline of ``agents.pid_formation``), the path of an SB3 zip (its algo and action mode come from
+    baseline of ``agents.pid_formation``), ``"station_keeper"`` (``agents.station_keeper``), the path of an SB3 zip (its algo and action mode come from
     the sidecar JSON or the run's config.yaml; ``action_mode`` overrides), or an RLlib checkpoint / run
     directory of ``formation-env train --backend rllib`` (its metadata fixes the action mode)."""
     if spec == "pid":
         return _pid_policy()
     if spec == "pid_formation":
         return _pid_formation_policy()
+    if spec == "station_keeper":
+        return _station_keeper_policy()
     path = Path(spec)
     if path.is_dir():
         # An RLlib checkpoint (or run directory); ray is imported only here, and only then.
@@ -74,7 +89,7 @@ def load_policy(spec: str, *, action_mode: str | None = None, name: str | None =
         return pol
     if not path.is_file():
         raise ValueError(f"policy file {spec!r} does not exist (give an SB3 .zip, an RLlib checkpoint directory, "
-                         "'pid' or 'pid_formation')")
+                         "'pid', 'pid_formation' or 'station_keeper')")
     meta = policy_metadata(path)
     mode = action_mode or meta.get("action_mode")
     if mode is None:

@@ -10,7 +10,10 @@ import numpy as np
 
 __all__ = ["markdown_table", "comparison_table", "groups_table"]
 
-_TABLE = (("rms_slot_error_m", "RMS slot error (m)", "{:.3f}"), ("max_slot_error_m", "max slot error (m, mean)", "{:.2f}"),
+_TABLE = (("rms_slot_error_m", "RMS slot error (m)", "{:.3f}"),
+          ("rms_along_track_m", "RMS along-track error (m)", "{:.3f}"),
+          ("rms_lateral_m", "RMS lateral error (m)", "{:.3f}"), ("rms_vertical_m", "RMS vertical error (m)", "{:.3f}"),
+          ("max_slot_error_m", "max slot error (m, mean)", "{:.2f}"),
           ("max_slot_error_m_worst", "max slot error (m, worst)", "{:.2f}"),
           ("time_within_1m_frac", "time within 1 m (fraction)", "{:.3f}"),
           ("min_separation_m", "min separation (m)", "{:.2f}"),
@@ -20,7 +23,10 @@ _TABLE = (("rms_slot_error_m", "RMS slot error (m)", "{:.3f}"), ("max_slot_error
           ("reconfig_time_s", "reconfiguration time (s)", "{:.1f}"),
           ("control_effort_rad", "control effort (rad RMS)", "{:.4f}"), ("throttle_mean", "mean throttle", "{:.3f}"),
           ("fuel_saving_pct", "follower fuel saving vs leader (%)", "{:.2f}"),
-          ("induced_drag_saving", "induced-drag saving (ELL)", "{:.4f}"), ("return", "episode return", "{:.1f}"))
+          ("induced_drag_saving", "induced-drag saving (ELL)", "{:.4f}"),
+          ("harvest_ratio", "harvest ratio (saving / calm-air optimum)", "{:.3f}"),
+          ("drag_saving_pct_ell", "drag saving, ELL (%)", "{:.2f}"), ("drag_saving_pct_6dof", "drag saving, 6-DOF (%)", "{:.2f}"),
+          ("return", "episode return", "{:.1f}"))
 _PLOT_KEYS = ("rms_slot_error_m", "max_slot_error_m", "max_slot_error_m_worst", "time_within_1m_frac", "min_separation_m",
               "control_effort_rad", "fuel_saving_pct")
 
@@ -37,8 +43,8 @@ def _cell(s: dict, key: str, fmt: str) -> str:
     v = s.get(key)
     if v is None:
         return "-"
-    if key == "rms_slot_error_m" and "rms_slot_error_m_ci" in s:
-        lo, hi = s["rms_slot_error_m_ci"]
+    if f"{key}_ci" in s and key in ("rms_slot_error_m", "rms_lateral_m", "rms_vertical_m", "harvest_ratio"):
+        lo, hi = s[f"{key}_ci"]
         return f"{_fmt(v, fmt)} [{_fmt(lo, fmt)}, {_fmt(hi, fmt)}]"
     if key in ("collisions", "crashes") and "episodes" in s:
         return f"{v}/{s['episodes']}"

@@ -11,9 +11,10 @@ from .stats import N_BOOT, bootstrap_ci, wilson_interval
 
 __all__ = ["summarise", "selection_score"]
 
-_MEAN_KEYS = ("return", "rms_slot_error_m", "max_slot_error_m", "time_within_1m_s", "time_within_1m_frac",
-              "control_effort_rad", "throttle_mean", "action_rms", "fuel_used_kg", "leader_fuel_kg", "fuel_saving_pct",
-              "induced_drag_saving", "duration_s", "box_outside_frac")
+_MEAN_KEYS = ("return", "rms_slot_error_m", "rms_along_track_m", "rms_lateral_m", "rms_vertical_m", "max_slot_error_m",
+              "time_within_1m_s", "time_within_1m_frac", "control_effort_rad", "throttle_mean", "action_rms",
+              "fuel_used_kg", "leader_fuel_kg", "fuel_saving_pct", "induced_drag_saving", "harvest_ratio",
+              "drag_saving_pct_ell", "drag_saving_pct_6dof", "duration_s", "box_outside_frac")
 
 
 def summarise(episodes: list[dict], *, n_boot: int = N_BOOT, seed: int = 0) -> dict:
@@ -42,9 +43,10 @@ def summarise(episodes: list[dict], *, n_boot: int = N_BOOT, seed: int = 0) -> d
         longest = np.array([e["box_outside_longest_s"] for e in episodes], dtype=float)
         s["box_outside_longest_s_worst"] = float(np.max(longest))
         s["box_outside_over_1s"] = int(np.sum(longest > 1.0))
-    if "induced_drag_saving" in episodes[0]:
-        sv = np.array([e["induced_drag_saving"] for e in episodes], dtype=float)
-        s["induced_drag_saving_ci"] = list(bootstrap_ci(sv, "mean", n_boot=n_boot, seed=seed))
+    for key in ("induced_drag_saving", "harvest_ratio", "rms_lateral_m", "rms_vertical_m"):
+        if key in episodes[0]:
+            vals = np.array([e[key] for e in episodes], dtype=float)
+            s[f"{key}_ci"] = list(bootstrap_ci(vals, "mean", n_boot=n_boot, seed=seed))
     if "reconfig_success" in episodes[0]:
         k = int(sum(e["reconfig_success"] for e in episodes))
         s["reconfig_success_rate"] = k / n

@@ -17,8 +17,11 @@ SCENARIO = Scenario(
     "induced-drag saving against 15 % at the thesis slot 1 span starboard, 0.3 span below)",
     duration_s=60.0,
     slots=(SlotSchedule(((0.0, (-2.0, 0.96, 0.1)),)),),
-    notes={"induced_drag_saving": 0.3645, "thesis_slot_saving": 0.1475, "z_exclusion_b": 0.1})
+    notes={"induced_drag_saving": 0.3645, "thesis_slot_saving": 0.1475, "z_exclusion_b": 0.1},
+    # an energy task: the ELL's loads reach the 6-DOF consistently (formation_env.wake.coupling, docs/ell.md)
+    wake_coupling="load_weighted")
 
 TASK = register_task(Task("close_formation", SCENARIO, "formation_env/CloseFormation-v0", 1,
+                          baselines=("pid", "pid_formation", "station_keeper"),
                           reference="formation_env.tasks.close_formation.optimum",
                           description="hold the ELL induced-drag optimum slot"))

@@ -43,7 +43,7 @@ from ...sim.formation import WakeConfig
 
 __all__ = ["DEFAULT_X_B", "THESIS_SLOT_B", "DEFAULT_Z_EXCLUSION_B", "CACHE_PATH", "SavingMap", "Optimum",
            "slot_savings", "saving_map", "ripple_profile", "exclusion_band", "find_optimum", "sensitivity",
-           "build_cache", "write_cache", "load_cache"]
+           "build_cache", "write_cache", "load_cache", "optimum_saving"]
 
 DEFAULT_X_B = -2.0
 THESIS_SLOT_B = (-2.0, 1.0, 0.3)  # section 6.5's formation-keeping slot
@@ -315,6 +315,16 @@ def load_cache(path=None) -> dict:
     if path is None:
         return json.loads(resources.files("formation_env.data").joinpath("close_formation_map.json").read_text())
     return json.loads(Path(path).read_text())
+
+
+def optimum_saving(cache: dict | None = None) -> float:
+    """The follower's induced-drag saving 1 - D_i(formation) / D_i(alone) at the optimum of the task's
+    allowed region (the best slot at x = -2 b outside the excluded band, both sides) in calm air, from the
+    cached map (``cache["optimum"]["saving"]``; the package's cache unless ``cache``): the denominator of a
+    harvest ratio (a follower's mean saving over this). With today's cache (nseg 10, discrete legs,
+    band |z| < 0.1 b) 0.36455 at (-2, 0.963, 0.1) b."""
+    c = load_cache() if cache is None else cache
+    return float(c["optimum"]["saving"])
 
 
 def main(argv=None) -> int:

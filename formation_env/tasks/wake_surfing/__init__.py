@@ -46,7 +46,9 @@ SCENARIO = Scenario(
     "to the position of least induced drag", duration_s=90.0,
     slots=(SlotSchedule(((0.0, (-2.0, 1.0, 0.3)),)),),
     safe_box_b=((-12.0, -0.5), (0.0, 2.0), (0.1, 0.8)),
-    notes={"z_exclusion_b": 0.1})
+    notes={"z_exclusion_b": 0.1},
+    # an energy task: the ELL's loads reach the 6-DOF consistently (formation_env.wake.coupling, docs/ell.md)
+    wake_coupling="load_weighted")
 
 WAKE_SURFING_REWARD = RewardWeights(slot=1.0, progress=1.0, benefit=10.0, box=10.0, box_scale_b=0.1, effort=0.01,
                                     rate=0.05)

@@ -12,6 +12,11 @@ reference_saving           mean over the episode of the reference optimum's savi
 saving_ratio               saving / reference_saving
 time_to_80_s               first time the saving (counted as above), averaged over the last second,
                            reaches 80 % of the reference (NaN: never)
+drag_saving_pct_ell        the energy account (:mod:`formation_env.sim.energy`), mean over the decisions: the
+                           ELL's predicted reduction of the follower's total drag at the flown state, % of its
+                           drag alone (an ended episode's missing decisions count as 0)
+drag_saving_pct_6dof       the reduction of the drag along the flight path the 6-DOF applies, formation against
+                           the same state and controls without the wake, %
 box_outside_frac           fraction of the decisions outside the safe box
 box_outside_longest_s      longest continuous time outside the box
 min_separation_m           smallest CG distance to the leader at the decision instants
@@ -29,6 +34,7 @@ import numpy as np
 from ...frames import ned_to_track_frame
 from ...rollout import Recorder, RolloutResult
 from ...scenarios import AEROSONDE_SPAN_M
+from ...sim.energy import ENERGY_COLUMNS
 
 __all__ = ["WakeSurfingRecorder", "episode_metrics", "longest_run", "WINDOW_S"]
 
@@ -48,7 +54,7 @@ class WakeSurfingRecorder(Recorder):
     """Records the follower (vehicle 1) of every formation at each decision (NaN once its episode ended)."""
 
     def start(self, sim, out) -> None:
-        self.rec = {k: [] for k in ("saving", "box", "sep", "rel", "chi", "speed")}
+        self.rec = {k: [] for k in ("saving", "box", "sep", "rel", "chi", "speed", "ell", "sixdof")}
         self.wind = sim.state.steady_wind.copy()  # each episode's steady wind (the reference follows it)
         self.hz = sim.config.control_hz
         self.full_decisions = -(-sim.n_steps // sim.substeps)  # an episode flown to the end
@@ -65,6 +71,9 @@ class WakeSurfingRecorder(Recorder):
         rec["rel"].append(np.where(alive[:, None], rel, np.nan))
         rec["chi"].append(chi)
         rec["speed"].append(np.linalg.norm(vd0, axis=1))
+        acc = info.energy_account[:, 1]  # the follower's energy account (zeros without wake)
+        rec["ell"].append(np.where(alive, acc[:, ENERGY_COLUMNS.index("drag_saving_pct_ell")], np.nan))
+        rec["sixdof"].append(np.where(alive, acc[:, ENERGY_COLUMNS.index("drag_saving_pct_6dof")], np.nan))
 
 
 def episode_metrics(rec: WakeSurfingRecorder, result: RolloutResult, keep_series: bool = False) -> list[dict]:
@@ -98,6 +107,8 @@ def episode_metrics(rec: WakeSurfingRecorder, result: RolloutResult, keep_series
             "reference_saving": ref_saving,
             "saving_ratio": float(np.mean(sv_in) / ref_saving),
             "time_to_80_s": float((reached[0] + 1) / hz) if len(reached) else float("nan"),
+            "drag_saving_pct_ell": float(np.sum(arr["ell"][:n, i]) / (n + missing)),
+            "drag_saving_pct_6dof": float(np.sum(arr["sixdof"][:n, i]) / (n + missing)),
             "box_outside_frac": float(np.mean(outside)),
             "box_outside_longest_s": float(longest_run(outside) / hz),
             "min_separation_m": float(np.nanmin(arr["sep"][:n, i])),

@@ -61,7 +61,7 @@ from ..close_formation.optimum import DEFAULT_Z_EXCLUSION_B, slot_savings
 
 __all__ = ["SAFE_BOX_B", "X_B", "CRAB_MAX_DEG", "CACHE_PATH", "crab_angle_rad", "rotate_track_to_heading",
            "saving_in_crosswind", "optimum_in_box", "build_cache", "write_cache", "load_cache",
-           "reference_optimum", "episode_reference", "main"]
+           "reference_optimum", "episode_reference", "optimum_saving", "main"]
 
 SAFE_BOX_B = get_scenario("wake_surfing").safe_box_b  # ((x_lo, x_hi), (y_lo, y_hi), (z_lo, z_hi)) spans
 X_B = -2.0  # the follower's along-track set-point, spans
@@ -265,6 +265,17 @@ def episode_reference(wind_ned, track_rad, airspeed_mps, *, cache: dict | None =
     c = crab_angle_rad(np.asarray(wind_ned, float), chi, va)
     y, z, s = reference_optimum(c, cache=cache)
     return {"crab_rad": c, "y_b": y, "z_b": z, "saving": s, "mean_saving": float(np.mean(s))}
+
+
+def optimum_saving(cache: dict | None = None) -> float:
+    """The follower's induced-drag saving at the optimum of the safe box (x = -2 b) in calm air (crab
+    angle 0), from the cached table (the package's cache unless ``cache``): the denominator of a harvest
+    ratio. With today's cache 0.36455 at (-2, 0.963, 0.1) b (the box's floor)."""
+    t = load_cache() if cache is None else cache
+    grid = [float(d) for d in t["crab_deg"]]
+    if 0.0 not in grid:
+        raise ValueError(f"optimum_saving: the cache's crab grid {grid[0]}..{grid[-1]} deg has no 0 deg entry")
+    return float(t["optimum"]["saving"][grid.index(0.0)])
 
 
 def main(argv=None) -> int:

@@ -1,0 +1,75 @@
+"""Close-formation metrics of every evaluation (issue 24): the slot-frame RMS components (the saving lives
+across the track, the 3D RMS is dominated by the along-track error) and the harvest ratio (the mean
+induced-drag saving over the calm-air saving at the task's reference optimum)."""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+import pytest
+
+from formation_env.rollout import ZeroPolicy
+from formation_env.sim import Simulation
+from formation_env.tasks import get_task, task_for_scenario
+from train.evaluation.episodes import FAILURE_SLOT_ERROR_M, eval_env_config, reference_saving, run_episodes
+from train.evaluation.summary import summarise
+
+COMPONENTS = ("rms_along_track_m", "rms_lateral_m", "rms_vertical_m")
+
+
+def test_components_add_up_to_the_3d_rms_and_harvest_is_saving_over_the_optimum():
+    """The slot-frame components are a rotation of the position error: their squares sum to the 3D mean square
+    (to rounding), whatever the track; the harvest ratio is the mean saving over the task's optimum saving."""
+    cfg = dataclasses.replace(eval_env_config("close_formation", "setpoints", turbulence_sigma_mps=1.0,
+                                              compute_benefit=True), duration_s=3.0)
+    eps = run_episodes(ZeroPolicy(), cfg, [3, 4])
+    opt = get_task("close_formation").optimum_saving()
+    assert opt is not None and 0.2 < opt < 0.9 and reference_saving("close_formation") == opt
+    for e in eps:
+        total = sum(e[k] ** 2 for k in COMPONENTS)
+        assert total == pytest.approx(e["rms_slot_error_m"] ** 2, rel=1e-9), e
+        assert e["harvest_ratio"] == pytest.approx(e["induced_drag_saving"] / opt, rel=1e-12)
+    s = summarise(eps, n_boot=50)
+    for k in COMPONENTS + ("harvest_ratio",):
+        assert k in s and np.isfinite(s[k])
+    assert all(f"{k}_ci" in s for k in ("rms_lateral_m", "rms_vertical_m", "harvest_ratio"))
+
+
+def test_components_are_in_the_slot_frame():
+    """A follower displaced by a known slot-frame offset on a track that is not north reads that offset back
+    on the right axes (along, lateral, vertical)."""
+    cfg = dataclasses.replace(eval_env_config("formation_keeping", "setpoints", turbulence_sigma_mps=0.0), duration_s=1.0)
+    sim = Simulation(cfg, batch_size=1)
+    sim.reset(seeds=[0])
+    s = sim.state
+    chi = np.arctan2(s.velocity_demand[0, 0, 1], s.velocity_demand[0, 0, 0])
+    off = np.array([1.5, -0.4, 0.25])  # along, lateral, vertical, m
+    ned = np.array([np.cos(chi) * off[0] - np.sin(chi) * off[1], np.sin(chi) * off[0] + np.cos(chi) * off[1], off[2]])
+    s.aircraft[0, 1, 10:13] = s.position_demand[0, 1] + ned
+    np.testing.assert_allclose(sim.info.slot_error_track_m[0, 1], off, atol=1e-9)
+
+
+def _crash(obs):
+    a = np.zeros((obs.shape[0], 4))
+    a[:, 0] = a[:, 1] = 1.0  # full elevator and aileron: out of the envelope within a second
+    return a
+
+
+def test_an_early_end_charges_every_axis():
+    """The time an episode did not fly counts FAILURE_SLOT_ERROR_M on each axis, so a crash never scores a
+    better component RMS (or harvest) than flying on: the honest scoring's 3D rule, per axis."""
+    from formation_env.rollout import FunctionPolicy
+
+    cfg = eval_env_config("close_formation", "surfaces", turbulence_sigma_mps=0.0, compute_benefit=True,
+                          duration_s=10.0)
+    e = run_episodes(FunctionPolicy(_crash), cfg, [0])[0]
+    assert e["crashed"] and e["duration_s"] < 2.0
+    for k in COMPONENTS:
+        assert e[k] > 0.9 * FAILURE_SLOT_ERROR_M, e
+    assert e["harvest_ratio"] < 0.2
+
+
+def test_tasks_without_a_reference_report_no_harvest():
+    assert task_for_scenario("formation_keeping") is not None and reference_saving("formation_keeping") is None
+    assert task_for_scenario("no_such_scenario") is None
