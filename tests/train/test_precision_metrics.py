@@ -73,3 +73,23 @@ def test_an_early_end_charges_every_axis():
 def test_tasks_without_a_reference_report_no_harvest():
     assert task_for_scenario("formation_keeping") is not None and reference_saving("formation_keeping") is None
     assert task_for_scenario("no_such_scenario") is None
+
+
+def test_station_keeper_is_a_baseline_compared_with_the_ones_before_it():
+    """Candidates are paired against every baseline present, and each baseline against the kinds before it
+    (pid_formation vs pid; station_keeper vs both), on the precision metrics too (harvest: higher is better)."""
+    from train.evaluation.comparisons import comparisons
+
+    rng = np.random.default_rng(0)
+
+    def eps(harvest):
+        return [{"seed": k, "rms_slot_error_m": 1.0 + rng.random(), "rms_lateral_m": rng.random(),
+                 "rms_vertical_m": rng.random(), "harvest_ratio": harvest + 0.01 * rng.random()} for k in range(12)]
+
+    by_name = {"ppo": eps(0.5), "pid": eps(0.1), "pid_formation": eps(0.12), "station_keeper": eps(0.3)}
+    out = comparisons(by_name, n_boot=200)
+    assert set(out["ppo"]) == {"pid", "pid_formation", "station_keeper"}
+    assert set(out["pid_formation"]) == {"pid"} and set(out["station_keeper"]) == {"pid", "pid_formation"}
+    h = out["ppo"]["station_keeper"]["harvest_ratio"]
+    assert h["mean_reduction"] < 0 and h["n_better"] == 12  # the candidate harvests more: "better" for higher
+    assert "rms_lateral_m" in out["station_keeper"]["pid"]

@@ -13,7 +13,9 @@ from .stats import N_BOOT, paired_comparison, paired_rate_difference, seed_sprea
 
 __all__ = ["compare_episodes", "comparisons", "seed_groups", "group_report", "BASELINES"]
 
-BASELINES = ("pid", "pid_formation")   # the classical controllers every other policy is compared with
+# the classical controllers every other policy is compared with, in order: each is also compared with the ones
+# before it (pid_formation with the thesis PID; station_keeper, issue 24, with both)
+BASELINES = ("pid", "pid_formation", "station_keeper")
 _SEED_NAME = re.compile(r"^(?P<group>.+)_seed(?P<seed>\d+)$")
 # the close-formation metrics compared when the episodes have them (issue 24): metric -> lower is better
 _PRECISION_KEYS = {"rms_lateral_m": True, "rms_vertical_m": True, "harvest_ratio": False}
@@ -57,8 +59,9 @@ def compare_episodes(baseline: list[dict], candidate: list[dict] | None = None, 
 def comparisons(episodes: dict[str, list[dict]], baselines: dict[str, str] | None = None, *,
                 candidates: Sequence[str] | None = None, n_boot: int = N_BOOT, seed: int = 0) -> dict:
     """``{policy: {baseline: compare_episodes(...)}}`` for every candidate policy against every
-    baseline present, and pid_formation against pid when both are. ``baselines`` maps the baseline
-    kind ("pid", "pid_formation") to its policy name (default: the names themselves, when evaluated);
+    baseline present, and every baseline against the kinds before it in :data:`BASELINES` (pid_formation against
+    pid; station_keeper against both). ``baselines`` maps the baseline kind ("pid", "pid_formation",
+    "station_keeper") to its policy name (default: the names themselves, when evaluated);
     ``candidates`` defaults to every other policy except a baseline given twice ("pid-2"). Every
     bootstrap draws from ``default_rng(seed)``."""
     if baselines is None:
@@ -69,9 +72,11 @@ def comparisons(episodes: dict[str, list[dict]], baselines: dict[str, str] | Non
     out: dict[str, dict] = {}
     for name in candidates if baselines else ():
         out[name] = {b: compare_episodes(episodes[b], episodes[name], n_boot=n_boot, seed=seed) for b in baselines.values()}
-    if "pid" in baselines and "pid_formation" in baselines:
-        pf, p = baselines["pid_formation"], baselines["pid"]
-        out[pf] = {p: compare_episodes(episodes[p], episodes[pf], n_boot=n_boot, seed=seed)}
+    kinds = [k for k in BASELINES if k in baselines]
+    for i, later in enumerate(kinds[1:], 1):
+        cand = baselines[later]
+        out[cand] = {baselines[k]: compare_episodes(episodes[baselines[k]], episodes[cand], n_boot=n_boot, seed=seed)
+                     for k in kinds[:i]}
     return out
 
 

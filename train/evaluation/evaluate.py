@@ -35,7 +35,7 @@ every bootstrap 10,000 resamples from a fixed seed, so the same episodes always 
   ``min_separation_m`` (smallest over all episodes) and ``min_separation_m_p05`` (5th percentile of the
   per-episode minima);
 * ``comparisons[<policy>][<baseline>]``: every policy against each baseline evaluated beside it ("pid",
-  "pid_formation"; and pid_formation against pid), paired by episode: :func:`train.evaluation.stats.paired_comparison`
+  "pid_formation", "station_keeper"; and each baseline against the ones before it), paired by episode: :func:`train.evaluation.stats.paired_comparison`
   of the per-episode RMS slot error (reduction = baseline - policy, m, mean and median with intervals,
   relative reduction of the mean, fraction of episodes better, sign test) and, with a moving slot,
   :func:`train.evaluation.stats.paired_rate_difference` of the reconfiguration success;
