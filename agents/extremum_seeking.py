@@ -26,10 +26,11 @@ docs/wake_surfing.md has the sweep and its numbers).
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, fields
+from dataclasses import dataclass
 
 import numpy as np
 
+from agents.common import check_gains
 from agents.pid_formation import PIDFormation
 
 __all__ = ["ExtremumSeekingGains", "ExtremumSeeking"]
@@ -66,10 +67,7 @@ class ExtremumSeekingGains:
     ki_z: float = 0.5
 
     def __post_init__(self) -> None:
-        for f in fields(self):
-            v = getattr(self, f.name)
-            if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v) or v < 0:
-                raise ValueError(f"ExtremumSeekingGains.{f.name} must be a finite number >= 0, got {v!r}")
+        check_gains(self)
         for name in ("period_y_s", "period_z_s", "highpass_rad_s", "lowpass_rad_s"):  # divisors / filter corners
             if getattr(self, name) <= 0:
                 raise ValueError(f"ExtremumSeekingGains.{name} must be > 0, got {getattr(self, name)!r}")

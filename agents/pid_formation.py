@@ -32,13 +32,14 @@ Relative position and velocity are the ones to the *real* leader (the slot moves
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, fields
+from dataclasses import dataclass
 
 import numpy as np
 
 from formation_env.envs.actions import SETPOINT_POSITION_SCALE_M, SETPOINT_SPEED_SCALE_MPS
-from formation_env.envs.observations import (POSITION_SCALE_M, VELOCITY_SCALE_MPS, WIND_SCALE_MPS, observation_size,
-                                             to_dict)
+from formation_env.envs.observations import POSITION_SCALE_M, VELOCITY_SCALE_MPS, WIND_SCALE_MPS
+
+from .common import RowIntegrators, check_gains, observation_groups
 
 __all__ = ["PIDFormationGains", "PIDFormation", "inverse_slog"]
 
@@ -65,13 +66,10 @@ class PIDFormationGains:
     kp_lead: float = 0.0  # m of position-demand lead per m of along-track lag (adds to the tracker's speed demand)
 
     def __post_init__(self) -> None:
-        for f in fields(self):
-            v = getattr(self, f.name)
-            if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v) or v < 0:
-                raise ValueError(f"PIDFormationGains.{f.name} must be a finite number >= 0, got {v!r}")
+        check_gains(self)
 
 
-class PIDFormation:
+class PIDFormation(RowIntegrators):
     """Batched, stateful agent: ``reset(n_rows)`` then ``act(obs (n_rows, D)) -> (n_rows, 4)`` setpoint
     actions in [-1, 1]. Works for any formation size (the observation length fixes V)."""
 
@@ -110,25 +108,9 @@ class PIDFormation:
         down = offset_m / lo if lo > 0 else np.zeros_like(offset_m)
         return np.where(offset_m >= 0, up, down)
 
-    def reset(self, n_rows: int) -> None:
-        if isinstance(n_rows, bool) or not isinstance(n_rows, (int, np.integer)) or n_rows < 1:
-            raise ValueError(f"PIDFormation.reset: n_rows must be an integer >= 1, got {n_rows!r}")
-        self.integral = np.zeros((int(n_rows), 3))
-
-    def reset_rows(self, rows) -> None:
-        """Zero the integrators of the given rows (their episodes restarted)."""
-        self.integral[np.asarray(rows)] = 0.0
-
     def act(self, obs) -> np.ndarray:
-        obs = np.asarray(obs, dtype=float)
-        if obs.ndim != 2:
-            raise ValueError(f"PIDFormation.act: obs must have shape (N, D), got {obs.shape}")
-        n_vehicles = next((v for v in range(1, 65) if observation_size(v) == obs.shape[1]), None)
-        if n_vehicles is None:
-            raise ValueError(f"PIDFormation.act: observation length {obs.shape[1]} matches no formation size")
-        if self.integral.shape[0] != obs.shape[0]:
-            self.reset(obs.shape[0])
-        groups = to_dict(obs, n_vehicles)
+        obs, groups = observation_groups(obs, "PIDFormation")
+        self._rows_for(obs)
         g = self.gains
         dt = 1.0 / self.control_hz
         err = inverse_slog(groups["slot_position_error"], POSITION_SCALE_M)

@@ -49,15 +49,16 @@ removed the collisions found on training seeds 21-60 (a follower that had fallen
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, fields
+from dataclasses import dataclass
 
 import numpy as np
 
 from formation_env.control.gains import AutopilotGains, TrackerGains
 from formation_env.envs.actions import SETPOINT_POSITION_SCALE_M, SETPOINT_SPEED_SCALE_MPS
-from formation_env.envs.observations import (NEIGHBOUR_POSITION_SCALE_M, POSITION_SCALE_M, VELOCITY_SCALE_MPS, WIND_SCALE_MPS, observation_size,
-                                             to_dict)
+from formation_env.envs.observations import (NEIGHBOUR_POSITION_SCALE_M, POSITION_SCALE_M, VELOCITY_SCALE_MPS,
+                                             WIND_SCALE_MPS)
 
+from .common import RowIntegrators, check_gains, observation_groups
 from .pid_formation import inverse_slog
 
 __all__ = ["StationKeeperGains", "StationKeeper"]
@@ -91,13 +92,10 @@ class StationKeeperGains:
     k_guard: float = 1.5
 
     def __post_init__(self) -> None:
-        for f in fields(self):
-            v = getattr(self, f.name)
-            if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v) or v < 0:
-                raise ValueError(f"StationKeeperGains.{f.name} must be a finite number >= 0, got {v!r}")
+        check_gains(self)
 
 
-class StationKeeper:
+class StationKeeper(RowIntegrators):
     """Batched, stateful agent: ``reset(n_rows)`` then ``act(obs (n_rows, D)) -> (n_rows, 4)`` setpoint
     actions in [-1, 1]."""
 
@@ -126,24 +124,9 @@ class StationKeeper:
                              f"Kp_offtrack > 0 and Kp_altitude < 0, got {self.bank_per_m!r}, {self.pitch_per_m!r}")
         self.integral = np.zeros((0, 3))
 
-    def reset(self, n_rows: int) -> None:
-        if isinstance(n_rows, bool) or not isinstance(n_rows, (int, np.integer)) or n_rows < 1:
-            raise ValueError(f"StationKeeper.reset: n_rows must be an integer >= 1, got {n_rows!r}")
-        self.integral = np.zeros((int(n_rows), 3))
-
-    def reset_rows(self, rows) -> None:
-        self.integral[np.asarray(rows)] = 0.0
-
     def act(self, obs) -> np.ndarray:
-        obs = np.asarray(obs, dtype=float)
-        if obs.ndim != 2:
-            raise ValueError(f"StationKeeper.act: obs must have shape (N, D), got {obs.shape}")
-        n_vehicles = next((v for v in range(1, 65) if observation_size(v) == obs.shape[1]), None)
-        if n_vehicles is None:
-            raise ValueError(f"StationKeeper.act: observation length {obs.shape[1]} matches no formation size")
-        if self.integral.shape[0] != obs.shape[0]:
-            self.reset(obs.shape[0])
-        groups = to_dict(obs, n_vehicles)
+        obs, groups = observation_groups(obs, "StationKeeper")
+        self._rows_for(obs)
         g, dt = self.gains, 1.0 / self.control_hz
         err = inverse_slog(groups["slot_position_error"], POSITION_SCALE_M)
         derr = inverse_slog(groups["slot_velocity_error"], VELOCITY_SCALE_MPS)

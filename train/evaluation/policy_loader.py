@@ -19,31 +19,27 @@ def _pid_policy() -> EvalPolicy:
     return EvalPolicy("pid", "residual", lambda obs: np.zeros((obs.shape[0], 4), dtype=np.float32))
 
 
-def _pid_formation_policy() -> EvalPolicy:
-    """The classical formation-keeping controller (``agents.pid_formation.PIDFormation``), imported
-    only here: a stateful agent whose ``reset(n_rows)`` runs before every batch of episodes."""
+# the classical agents of the top-level ``agents`` package: spec -> (module, class), imported only when asked for
+_AGENTS = {"pid_formation": ("agents.pid_formation", "PIDFormation"),
+           "station_keeper": ("agents.station_keeper", "StationKeeper")}
+
+
+def _agent_policy(spec: str) -> EvalPolicy:
+    """A classical agent of ``agents/`` (:data:`_AGENTS`: ``pid_formation``, the formation-keeping controller;
+    ``station_keeper``, the cross-track station keeper), imported only here: a stateful agent whose
+    ``reset(n_rows)`` runs before every batch of episodes."""
+    import importlib
+
+    module, cls = _AGENTS[spec]
     try:
-        from agents.pid_formation import PIDFormation
+        agent_class = getattr(importlib.import_module(module), cls)
     except ModuleNotFoundError as exc:
-        if exc.name not in ("agents.pid_formation", "agents"):
+        if exc.name not in (module, "agents"):
             raise
-        raise ValueError("policy 'pid_formation' needs agents/pid_formation.py, which this checkout does not have") from None
+        raise ValueError(f"policy {spec!r} needs {module.replace('.', '/')}.py, which this checkout does not have") from None
 
-    agent = PIDFormation()
-    return EvalPolicy("pid_formation", str(agent.action_mode), agent.act, float(agent.control_hz), reset=agent.reset)
-
-
-def _station_keeper_policy() -> EvalPolicy:
-    """The cross-track station keeper (``agents.station_keeper.StationKeeper``), imported only here."""
-    try:
-        from agents.station_keeper import StationKeeper
-    except ModuleNotFoundError as exc:
-        if exc.name not in ("agents.station_keeper", "agents"):
-            raise
-        raise ValueError("policy 'station_keeper' needs agents/station_keeper.py, which this checkout does not have") from None
-
-    agent = StationKeeper()
-    return EvalPolicy("station_keeper", str(agent.action_mode), agent.act, float(agent.control_hz), reset=agent.reset)
+    agent = agent_class()
+    return EvalPolicy(spec, str(agent.action_mode), agent.act, float(agent.control_hz), reset=agent.reset)
 
 
 def policy_metadata(path: Path) -> dict:
@@ -70,10 +66,8 @@ def load_policy(spec: str, *, action_mode: str | None = None, name: str | None =
     directory of ``formation-env train --backend rllib`` (its metadata fixes the action mode)."""
     if spec == "pid":
         return _pid_policy()
-    if spec == "pid_formation":
-        return _pid_formation_policy()
-    if spec == "station_keeper":
-        return _station_keeper_policy()
+    if spec in _AGENTS:
+        return _agent_policy(spec)
     path = Path(spec)
     if path.is_dir():
         # An RLlib checkpoint (or run directory); ray is imported only here, and only then.
