@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# The exact commands behind the committed policies in train/policies/ (issues 13 and 16): PPO, setpoints actions,
+# The exact commands behind the committed policies in train/policies/ (issues 13, 16 and 24): PPO, setpoints actions,
 # frozen Dryden turbulence sigma 1 m/s (wake_surfing: its task preset, train/hyperparams/ppo.yml), wake on, 3 training seeds per task, run two at a time on the
 # 2-core machine (one core each: NUMBA_NUM_THREADS=1, torch on 1 thread), then published with their
 # curves and validation history. Usage: bash train/committed_runs.sh [RUNS_DIR]
@@ -13,7 +13,7 @@ mkdir -p "$RUNS"
 jobs_list() {
   for seed in 0 1 2; do
     echo "formation_keeping 1200000 $seed"
-    echo "close_formation 1200000 $seed"
+    echo "close_formation 2200000 $seed"
     echo "reconfiguration 2500000 $seed"
     echo "wake_surfing 2000000 $seed"
   done

@@ -62,6 +62,11 @@ def register(sub) -> None:
     p.add_argument("--allow-scenario-mismatch", action="store_true",
                    help="evaluate a policy on a scenario other than the one it was trained for (its metadata's); "
                         "the observation sizes must still agree")
+    p.add_argument("--ablate", action="append", default=None, metavar="GROUPS",
+                   help="also fly every learned policy with these observation groups zeroed (comma-separated, from "
+                        "air_data, attitude, rates, altitude, slot_position_error, slot_velocity_error, induced_wind, "
+                        "induced_rotation, ambient_wind, engine, previous_action, slot_schedule, controller_state, "
+                        "neighbours); repeat for several ablations")
     p.add_argument("--out", default=None, help="output directory (default runs/eval-<scenario>-<timestamp>)")
     p.add_argument("--overwrite", action="store_true", help="allow an existing non-empty output directory")
     p.add_argument("--no-plots", action="store_true", help="write no figures (results.json, results.md, marl_eval.json)")
@@ -88,6 +93,11 @@ def run(args) -> int:
     from ..scenarios import get_scenario
 
     sc = get_scenario(args.scenario)  # unknown names fail before a policy loads
+    if args.ablate:
+        from train.evaluation.ablation import parse_ablation
+
+        for a in args.ablate:
+            parse_ablation(a)
     check_min_duration(args.duration, sc)
     for spec in args.policy:
         check_policy_scenario(spec, sc.name, allow=args.allow_scenario_mismatch)
@@ -102,14 +112,15 @@ def run(args) -> int:
                               seeds=args.seeds, wake=not args.no_wake, compute_benefit=args.benefit,
                               action_mode=args.action_mode, out_dir=out, overwrite=args.overwrite,
                               plots=not args.no_plots, duration_s=args.duration, turbulence_field=args.turbulence_field,
-                              log=print, **({} if args.bootstrap_resamples is None else {"n_boot": args.bootstrap_resamples}))
+                              ablations=args.ablate or (), log=print, **({} if args.bootstrap_resamples is None else {"n_boot": args.bootstrap_resamples}))
         print(res["table_markdown"])
         print(f"wrote {out}/levels.md, levels.json and " + ", ".join(f"sigma_{v:g}/" for v in levels))
         return 0
     rep = evaluate(args.policy, scenario=args.scenario, episodes=args.episodes, seeds=args.seeds,
                    turbulence_sigma_mps=levels[0], wake=not args.no_wake, compute_benefit=args.benefit,
                    action_mode=args.action_mode, out_dir=out, overwrite=args.overwrite, plots=not args.no_plots,
-                   duration_s=args.duration, turbulence_field=args.turbulence_field, log=print,
+                   duration_s=args.duration, turbulence_field=args.turbulence_field, ablations=args.ablate or (),
+                   log=print,
                    **({} if args.bootstrap_resamples is None else {"n_boot": args.bootstrap_resamples}))
     print(rep["table_markdown"])
     if rep["comparison_markdown"]:

@@ -40,9 +40,13 @@ OPTION_RANGES: dict[str, tuple[float, float, str, str]] = {
     "RewardWeights.slot": _WEIGHT,
     "RewardWeights.slot_scale_m": (0.1, 1000.0, "m", "Huber knee of the slot error: from a tenth of a metre to "
                                    "the whole formation"),
+    "RewardWeights.along_track_weight": (0.0, 1.0, "", "weight of the along-track component of the slot error "
+                                         "against the cross-track ones (1: the distance from the slot)"),
     "RewardWeights.effort": _WEIGHT,
     "RewardWeights.rate": _WEIGHT,
     "RewardWeights.benefit": _WEIGHT,
+    "RewardWeights.benefit_cap": (0.0, 2.0, "", "largest induced-drag saving the benefit term pays (the ELL reports at "
+                                  "most ~1.06, on the leader's wake plane)"),
     "RewardWeights.progress": _WEIGHT,
     "RewardWeights.shaping_gamma": (0.0, 1.0, "", "a discount factor"),
     "RewardWeights.terminal_forfeit": (0.0, 10.0, "", "multiple of the slot cost still to come that a collision or "
@@ -66,6 +70,8 @@ OPTION_RANGES: dict[str, tuple[float, float, str, str]] = {
     "Randomisation.turbulence_sigma_mps": (0.0, 10.0, "m/s", "turbulence intensity: MIL-F-8785C severe turbulence "
                                            "(exceeded with probability 1e-5) is ~5-7 m/s at low and medium "
                                            "altitude, extreme (1e-6) ~8-10 m/s"),
+    "Randomisation.turbulence_sigma_spread": (0.0, 1.0, "", "fraction of turbulence_sigma_mps the per-episode "
+                                              "intensity may fall below it: sigma drawn in [(1 - spread) sigma, sigma]"),
     "Randomisation.leader_turn_deg": (0.0, 180.0, "deg", "heading change of the leader's manoeuvre: a turn "
                                       "about (beyond 180 deg the same heading is reached the other way)"),
     "Randomisation.leader_climb_m": (0.0, 500.0, "m", "altitude change of the leader's manoeuvre: half the "
@@ -106,14 +112,15 @@ def _validate_fields(obj) -> None:
 @dataclass(frozen=True)
 class RewardWeights:
     """Per-agent reward (per decision), with e the agent's distance from its slot (m; vehicle 0: from its
-    reference path; in a scenario with a safe box, its along-track distance only), h the Huber function h(x) = x^2 / 2 for |x| <= 1 and |x| - 1/2 beyond, d its
+    reference path; in a scenario with a safe box, its along-track distance only; its along-track component
+    weighted by ``along_track_weight``), h the Huber function h(x) = x^2 / 2 for |x| <= 1 and |x| - 1/2 beyond, d its
     distance to the nearest other UAV and a its normalised action:
 
         r = - slot * h(e / slot_scale_m)                                   quadratic near the slot, linear far
             + progress * (shaping_gamma * Phi(s') - Phi(s)),  Phi = -h(e / slot_scale_m)   potential-based
             - separation * ((d_safe - d) / (d_safe - d_coll))^2   for d < d_safe        barrier before a collision
             - effort * |a|^2 / 4 - rate * |a - a_prev|^2 / 4
-            + benefit * induced-drag saving
+            + benefit * min(induced-drag saving, benefit_cap)
             - (collision + F) * [collision] - (crash + F) * [left the envelope or non-finite]
             - box * (1 + h(min(q / box_scale, 5))) * [q > 0]  q: distance outside the scenario's safe box
 
@@ -135,9 +142,16 @@ class RewardWeights:
 
     slot: float = 1.0
     slot_scale_m: float = 5.0
+    # < 1 poses a precision task: the saving of close formation changes within a tenth of a span across
+    # the track and hardly along it (semi-infinite trailing legs), so the cross-track error is what to pay
+    along_track_weight: float = 1.0
     effort: float = 0.01
     rate: float = 0.05
     benefit: float = 0.0
+    # a task whose allowed region excludes where the lattice overstates the saving (close_formation: the band
+    # |z| < 0.1 b around the leader's wake plane, issue 23 part 6) caps the paid saving at its optimum's, so
+    # that entering the band pays nothing more than holding the slot; 2.0: no cap
+    benefit_cap: float = 2.0
     progress: float = 1.0
     shaping_gamma: float = 0.995
     terminal_forfeit: float = 1.0
@@ -164,6 +178,9 @@ class Randomisation:
         trails along the air-relative velocity, against the track (the wake-surfing task's moving optimum).
     turbulence_sigma_mps: turbulence intensity (m/s, all axes; MIL-F-8785C low-altitude scale lengths); the
         model is EnvConfig.turbulence_field (one frozen von Karman field per formation by default).
+    turbulence_sigma_spread: each episode draws its intensity uniformly in [(1 - spread) sigma, sigma] (0: every
+        episode at turbulence_sigma_mps; 1: from calm air to sigma), so one policy learns every level it will be
+        judged at. Spectral fields only (von Karman, Dryden): the episode's field modes are scaled.
     leader_turn_deg, leader_climb_m, leader_speed_mps: amplitude of one random manoeuvre of the
         reference (heading change, altitude change, speed change), each drawn uniformly in +-amplitude
         and started at a random time in the first half of the episode.
@@ -174,6 +191,7 @@ class Randomisation:
     steady_wind_mps: float = 0.0
     crosswind_mps: float = 0.0
     turbulence_sigma_mps: float = 0.0
+    turbulence_sigma_spread: float = 0.0
     leader_turn_deg: float = 0.0
     leader_climb_m: float = 0.0
     leader_speed_mps: float = 0.0
@@ -250,6 +268,10 @@ class EnvConfig:
                                                and field_name not in TURBULENCE_FIELD_ALIASES):
             raise ValueError(f"EnvConfig: turbulence_field must be one of {TURBULENCE_FIELDS} (or 'frozen', the old name "
                              f"of 'lanes'), got {field_name!r}")
+        if self.randomisation.turbulence_sigma_spread > 0 and field_name not in ("von_karman", "dryden"):
+            raise ValueError(f"EnvConfig: randomisation.turbulence_sigma_spread > 0 (got "
+                             f"{self.randomisation.turbulence_sigma_spread!r}) needs a spectral turbulence_field "
+                             f"('von_karman' or 'dryden'), got {field_name!r}")
         sc = self.scenario if isinstance(self.scenario, Scenario) else get_scenario(self.scenario)
         physics_hz = 1.0 / sc.dt
         hz = _in_range("EnvConfig", "control_hz", self.control_hz)

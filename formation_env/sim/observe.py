@@ -202,7 +202,7 @@ def reward_formation(w, error, previous_error, action, previous_action, saving, 
         out[a, 2] = -w.separation * depth * depth
         out[a, 3] = -w.effort * effort / 4.0
         out[a, 4] = -w.rate * rate / 4.0
-        out[a, 5] = w.benefit * saving[a] if math.isfinite(saving[a]) else 0.0
+        out[a, 5] = w.benefit * min(saving[a], w.benefit_cap) if math.isfinite(saving[a]) else 0.0
         out[a, 6] = -(w.collision + forfeit) if collided else 0.0
         out[a, 7] = -(w.crash + forfeit) if crashed[a] else 0.0
         # capped at BOX_DEPTH_CAP_SCALES: far outside the box the cost stays bounded (the returns'

@@ -114,6 +114,7 @@ class RewardParams(NamedTuple):
     effort: float
     rate: float
     benefit: float
+    benefit_cap: float  # the largest saving the benefit term pays
     progress: float
     shaping_gamma: float
     terminal_forfeit: float
@@ -138,11 +139,12 @@ class RewardParams(NamedTuple):
         w, span = weights, AEROSONDE_SPAN_M
         box_low, box_high = safe_box_arrays(scenario)
         return cls(slot=w.slot, slot_scale_m=w.slot_scale_m, effort=w.effort, rate=w.rate, benefit=w.benefit,
+                   benefit_cap=w.benefit_cap,
                    progress=w.progress, shaping_gamma=w.shaping_gamma, terminal_forfeit=w.terminal_forfeit,
                    separation=w.separation, barrier_separation_m=w.barrier_separation_b * span,
                    collision=w.collision, crash=w.crash, collision_separation_m=collision_separation_b * span,
                    box=w.box, box_scale_m=w.box_scale_b * span, box_low_m=box_low, box_high_m=box_high,
-                   slot_error_axes=slot_error_axes(scenario))
+                   slot_error_axes=slot_error_axes(scenario) * np.array([w.along_track_weight, 1.0, 1.0]))
 
 
 class TurbulenceParams(NamedTuple):

@@ -177,7 +177,7 @@ class Simulation:
             raise ValueError(f"reset: {len(seeds)} seeds for {len(idx)} formations")
         wind = self._reset_options(options, len(idx))
         sc, rnd, v, s = self.scenario, self.config.randomisation, self.n_vehicles, self.state
-        field_seeds = []
+        field_seeds, field_scales = [], []
         start = sc.start_position_ned()
         for i, seed in zip(idx, seeds):
             rng = np.random.default_rng(seed)
@@ -207,6 +207,9 @@ class Simulation:
             s.reference_position[i] = sc.reference(0.0)[0]
             if rnd.turbulence_sigma_mps > 0:
                 field_seeds.append(int(rng.integers(2**63 - 1)))
+                # drawn only with a spread, so that every other configuration keeps its seeds' episodes
+                field_scales.append(1.0 - rnd.turbulence_sigma_spread * rng.uniform()
+                                    if rnd.turbulence_sigma_spread > 0 else 1.0)
             s.controller[i] = 0.0
             s.controller[i, :, 6] = state[:, 5]  # the washout filter starts settled on the yaw rate
             s.step[i] = 0
@@ -225,6 +228,8 @@ class Simulation:
         if field_seeds:  # the field of the configured model from each episode's seed (the same draw for every model)
             if self.params.turbulence == TURBULENCE_CODES["von_karman"]:
                 spectral_field_reset(self.params.field.modes, s.modes, idx, field_seeds)
+                if rnd.turbulence_sigma_spread > 0:  # the episode's intensity: every mode scaled alike
+                    s.modes.amplitude[idx] *= np.asarray(field_scales)[:, None, None]
             else:
                 frozen_field_reset(self.params.field.lanes, s.field, idx, field_seeds)
         refresh(self.params, s, idx, self.output)

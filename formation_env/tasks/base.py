@@ -27,7 +27,9 @@ class Task:
     ``make_config`` start from them; given options override them); ``gym_id``/``gym_learner``: its
     single-agent Gymnasium id and learner index; ``baselines``: names of the agents it is judged against;
     ``reference``: the reference optimum (a module or object, None where the task has none); ``metrics``:
-    a callable making the task's own per-episode metrics (None: the generic evaluation table)."""
+    a callable making the task's own per-episode metrics (None: the generic evaluation table);
+    ``test_randomisation``: :class:`~formation_env.sim.config.Randomisation` fields the held-out test set (and
+    the training's validation) draws besides the turbulence level, so that even calm-air episodes differ."""
 
     name: str
     scenario: object
@@ -38,6 +40,7 @@ class Task:
     reference: object = None
     metrics: Callable | None = None
     description: str = ""
+    test_randomisation: dict = field(default_factory=dict)
 
     @property
     def scenario_name(self) -> str:

@@ -107,7 +107,7 @@ def reward_terms(w: RewardWeights, error, previous_error, action, previous_actio
             "separation": -w.separation * depth * depth,
             "effort": -w.effort * np.sum(action * action, axis=-1) / 4.0,
             "rate": -w.rate * np.sum((action - previous_action) ** 2, axis=-1) / 4.0,
-            "benefit": w.benefit * np.where(np.isfinite(saving), saving, 0.0),
+            "benefit": w.benefit * np.where(np.isfinite(saving), np.minimum(saving, w.benefit_cap), 0.0),
             "collision": -(w.collision + forfeit) * collided.astype(float),
             "crash": -(w.crash + forfeit) * crashed.astype(float),
         }

@@ -97,7 +97,7 @@ def test_scenario_and_gym_id(cache):
     slot = np.array(sc.slots[0].offset_and_rate(0.0)[0]) / sc.slots[0].span_m
     np.testing.assert_allclose(slot, cache["scenario_slot_b"], atol=1e-12)
     np.testing.assert_allclose(slot, cache["optimum"]["offset_b"], atol=0.005 + 1e-9)
-    assert "36 %" in sc.description and f"{100 * cache['scenario_slot_saving']:.0f} %" in sc.description
+    assert "37 %" in sc.description and f"{100 * cache['scenario_slot_saving']:.0f} %" in sc.description
     assert GYM_IDS["formation_env/CloseFormation-v0"] == ("close_formation", 1)
     env = gym.make("formation_env/CloseFormation-v0", duration_s=1.0, action_mode="residual", compute_benefit=True)
     obs, _ = env.reset(seed=0)

@@ -67,7 +67,7 @@ def test_calm_optimum_agrees_with_the_close_formation_map(calm):
     assert calm["offset_b"][1] == pytest.approx(0.963, abs=5e-3)
     assert calm["offset_b"][1] == pytest.approx(ref["offset_b"][1], abs=1e-3)
     assert calm["offset_b"][2] == pytest.approx(0.1, abs=1e-9)  # on the band's (and the box's) edge
-    assert calm["saving"] == pytest.approx(0.3645, abs=1e-3)
+    assert calm["saving"] == pytest.approx(0.3666, abs=1e-3)  # the lift-matched wing (0.3645 flat)
     assert calm["saving"] == pytest.approx(ref["saving"], abs=1e-4)
     box = get_scenario("wake_surfing").safe_box_b
     assert ws.SAFE_BOX_B == box and box[2][0] >= cfm.DEFAULT_Z_EXCLUSION_B

@@ -20,6 +20,9 @@ action_rms                     RMS of the agent's normalised action (0 for the P
 fuel_used_kg, leader_fuel_kg   fuel burnt by the followers (mean) and by the leader
 fuel_saving_pct                100 (1 - follower fuel / leader fuel)
 induced_drag_saving            mean ELL induced-drag saving of the followers (with ``compute_benefit``)
+harvest_ratio                  (a task with a reference optimum) mean over the decisions of the saving
+                               capped at the optimum of the task's allowed region, over that optimum (the
+                               time not flown: no saving); ``harvest_ratio_uncapped`` without the cap
 reconfig_success               (scenarios with a moving slot) no collision or crash and every follower
                                within 1 span (2.9 m) of its final slot for the last 5 s
 reconfig_time_s                time from the start of the slot schedule until the follower is within
@@ -86,12 +89,14 @@ def evaluate(policies: Sequence[str], *, scenario: str, episodes: int = TEST_EPI
              turbulence_sigma_mps: float | None = None, wake: bool = True, compute_benefit: bool = False,
              action_mode: str | None = None, out_dir: str | Path | None = None, overwrite: bool = False,
              plots: bool = True, duration_s: float | None = None, groups: dict[str, Sequence[str]] | None = None,
-             turbulence_field: str | None = None,
+             turbulence_field: str | None = None, ablations: Sequence[str | Sequence[str]] = (),
              n_boot: int = N_BOOT, log: Callable[[str], None] | None = None) -> dict:
     """Evaluate ``policies`` ("pid", "pid_formation", SB3 zips or RLlib checkpoints) on the same held-out
     episodes (``episodes`` seeds from ``TEST_SEED_BASE``, or from ``seeds[0]``, or exactly ``seeds`` when
     it holds several: then ``episodes`` is not used); optionally write ``results.json``, ``results.md``
-    and comparison plots into ``out_dir`` (a new directory).
+    and comparison plots into ``out_dir`` (a new directory). ``ablations``: observation groups to hide, each an
+    entry like ``"induced_wind,induced_rotation"``; every learned policy is also flown with each hidden
+    (:mod:`train.evaluation.ablation`, named ``<policy>-without-<groups>``) on the same episodes.
 
     The report: ``policies.<name>.summary`` / ``.episodes`` (see :func:`summarise`), ``comparisons``
     (:func:`comparisons`: every policy against each baseline evaluated with it), ``groups`` (seed groups:
@@ -136,6 +141,18 @@ def evaluate(policies: Sequence[str], *, scenario: str, episodes: int = TEST_EPI
             n += 1
         loaded.append(pol)
         specs[pol.name] = spec
+    if ablations:
+        from formation_env.scenarios import get_scenario as _scenario
+
+        from .ablation import ablated, parse_ablation
+
+        hidden = [parse_ablation(a) for a in ablations]
+        n_vehicles = _scenario(scenario).n_vehicles
+        for pol in [p for p in loaded if specs[p.name] not in BASELINES]:
+            for groups in hidden:
+                copy = ablated(pol, groups, n_vehicles)
+                loaded.append(copy)
+                specs[copy.name] = specs[pol.name]
     names = [p.name for p in loaded]
     group_spec = seed_groups(names)
     for g, members in (groups or {}).items():

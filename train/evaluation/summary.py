@@ -14,6 +14,7 @@ __all__ = ["summarise", "selection_score"]
 _MEAN_KEYS = ("return", "rms_slot_error_m", "rms_along_track_m", "rms_lateral_m", "rms_vertical_m", "max_slot_error_m",
               "time_within_1m_s", "time_within_1m_frac", "control_effort_rad", "throttle_mean", "action_rms",
               "fuel_used_kg", "leader_fuel_kg", "fuel_saving_pct", "induced_drag_saving", "harvest_ratio",
+              "harvest_ratio_uncapped",
               "drag_saving_pct_ell", "drag_saving_pct_6dof", "duration_s", "box_outside_frac")
 
 
@@ -60,11 +61,13 @@ def selection_score(summary: dict) -> float:
     """Lower is better: the model-selection criterion of the eval callback (RMS slot error; a
     collision or crash disqualifies; failed reconfigurations add 100 m each as a fraction; in a
     safe-box task, minus the mean induced-drag saving plus the fraction of episodes that left the box
-    for more than 1 s)."""
+    for more than 1 s; in a task with a reference optimum, minus the harvest ratio)."""
     if summary["collisions"] or summary["crashes"]:
         return float("inf")
     if "box_outside_over_1s" in summary:  # a safe-box task (wake surfing): the saving, inside the box
         return float(-summary["induced_drag_saving"] + summary["box_outside_over_1s"] / summary["episodes"])
+    if "harvest_ratio" in summary:  # a task with a reference optimum (close_formation): the harvest it exists for
+        return float(-summary["harvest_ratio"])
     score = summary["rms_slot_error_m"]
     if "reconfig_success_rate" in summary:
         score += 100.0 * (1.0 - summary["reconfig_success_rate"])

@@ -105,6 +105,8 @@ def build_callbacks(cfg: TrainConfig, run_dir: Path, state: dict, log: Callable[
                 + (f", reconfig success {summ['reconfig_success_rate']:.2f}" if "reconfig_success_rate" in summ else "")
                 + (f", saving {summ['induced_drag_saving']:.3f}, >1 s outside the box {summ['box_outside_over_1s']}"
                    if "box_outside_over_1s" in summ else "")
+                + (f", harvest {summ['harvest_ratio']:.3f} (lateral / vertical RMS {summ['rms_lateral_m']:.2f} / "
+                   f"{summ['rms_vertical_m']:.2f} m)" if "harvest_ratio" in summ else "")
                 + f", score {score:.3f} (best {state['best_score']:.3f} at {state['best_steps']})")
 
     class Progress(BaseCallback):

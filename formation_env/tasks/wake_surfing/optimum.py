@@ -270,7 +270,7 @@ def episode_reference(wind_ned, track_rad, airspeed_mps, *, cache: dict | None =
 def optimum_saving(cache: dict | None = None) -> float:
     """The follower's induced-drag saving at the optimum of the safe box (x = -2 b) in calm air (crab
     angle 0), from the cached table (the package's cache unless ``cache``): the denominator of a harvest
-    ratio. With today's cache 0.36455 at (-2, 0.963, 0.1) b (the box's floor)."""
+    ratio. With today's cache 0.3666 at (-2, 0.9635, 0.1) b (the box's floor)."""
     t = load_cache() if cache is None else cache
     grid = [float(d) for d in t["crab_deg"]]
     if 0.0 not in grid:
