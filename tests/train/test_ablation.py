@@ -48,3 +48,18 @@ def test_cli_refuses_a_bad_group_with_exit_status_2(capsys):
 
     assert main(["evaluate", "--scenario", "close_formation", "--policy", "pid", "--ablate", "nope"]) == 2
     assert "unknown observation group" in capsys.readouterr().err
+
+
+def test_evaluate_flies_each_ablation_on_the_same_episodes():
+    from pathlib import Path
+
+    from train.evaluation.evaluate import evaluate
+
+    zip_path = Path(__file__).resolve().parents[2] / "train" / "policies" / "close_formation_ppo_setpoints_seed0.zip"
+    rep = evaluate([str(zip_path), "pid"], scenario="close_formation", episodes=2, duration_s=2.0, plots=False,
+                   ablations=["induced_wind,induced_rotation"], n_boot=100)
+    names = set(rep["policies"])
+    assert {"close_formation_ppo_setpoints_seed0", "close_formation_ppo_setpoints_seed0-without-induced_wind+induced_rotation",
+            "pid"} == names
+    a, b = (rep["policies"][n]["episodes"] for n in sorted(names - {"pid"}))
+    assert [e["seed"] for e in a] == [e["seed"] for e in b]

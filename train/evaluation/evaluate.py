@@ -149,8 +149,8 @@ def evaluate(policies: Sequence[str], *, scenario: str, episodes: int = TEST_EPI
         hidden = [parse_ablation(a) for a in ablations]
         n_vehicles = _scenario(scenario).n_vehicles
         for pol in [p for p in loaded if specs[p.name] not in BASELINES]:
-            for groups in hidden:
-                copy = ablated(pol, groups, n_vehicles)
+            for hide in hidden:  # not ``groups``: that is the seed-group argument
+                copy = ablated(pol, hide, n_vehicles)
                 loaded.append(copy)
                 specs[copy.name] = specs[pol.name]
     names = [p.name for p in loaded]
