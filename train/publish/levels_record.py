@@ -1,0 +1,75 @@
+"""The committed record of a multi-level evaluation (``formation-env evaluate --turbulence 0 0.5 1 1.5``, whose
+output directory holds ``levels.json`` and one ``sigma_<level>/results.json`` per level): per level the
+summaries of every policy (ablated copies included), the paired comparisons, and per-episode columns of the
+quantities close formation is judged by for the controllers themselves (harvest ratio, slot-frame RMS errors,
+smallest separation, collision, episode length: enough to recompute their intervals and paired differences).
+The per-decision series and the ablated copies' episodes stay out (the full results are ~30 MB).
+
+    python -m train.publish.levels_record RESULTS_DIR OUT.json [--command "..."] [--overwrite]
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from pathlib import Path
+
+__all__ = ["EPISODE_KEYS", "levels_record", "main"]
+
+EPISODE_KEYS = ("seed", "duration_s", "harvest_ratio", "rms_along_track_m", "rms_lateral_m", "rms_vertical_m",
+                "min_separation_m", "collision")
+
+
+def _round(v):
+    return float(f"{v:.6g}") if isinstance(v, float) else v
+
+
+def levels_record(results_dir: str | Path, *, command: str | None = None) -> dict:
+    """The compact record of ``results_dir`` (see the module docstring)."""
+    src = Path(results_dir)
+    levels = json.loads((src / "levels.json").read_text())
+    out = {"scenario": levels["scenario"], "levels": levels["levels"], "command": command, "by_level": {}}
+    for lv in levels["levels"]:
+        name = f"sigma_{lv:g}"
+        rep = json.loads((src / name / "results.json").read_text())
+        out["by_level"][name] = {
+            "turbulence_sigma_mps": rep["turbulence_sigma_mps"], "turbulence_field": rep.get("turbulence_field"),
+            "wake_coupling": rep.get("wake_coupling"), "seeds": [rep["seeds"][0], rep["seeds"][-1]],
+            "n_episodes": len(rep["seeds"]),
+            "summaries": {p: {k: v for k, v in x["summary"].items() if k != "wall_s"} for p, x in rep["policies"].items()},
+            "comparisons": rep.get("comparisons", {}),
+            "episodes": {p: {k: [_round(e.get(k)) for e in x["episodes"]] for k in EPISODE_KEYS}
+                         for p, x in rep["policies"].items() if "-without-" not in p},
+        }
+    md = src / "levels.md"
+    out["table_markdown"] = md.read_text() if md.is_file() else None
+    return out
+
+
+def main(argv: list[str] | None = None) -> int:
+    p = argparse.ArgumentParser(prog="python -m train.publish.levels_record", description=__doc__.split("\n\n")[0])
+    p.add_argument("results_dir")
+    p.add_argument("out")
+    p.add_argument("--command", help="the evaluate command that made the results (stored in the record)")
+    p.add_argument("--overwrite", action="store_true")
+    a = p.parse_args(argv)
+    from formation_env.io import atomic_write_text
+
+    src = Path(a.results_dir)
+    if not (src / "levels.json").is_file():
+        print(f"error: {src} has no levels.json (is it the --out of 'formation-env evaluate --turbulence L1 L2 ...'?)",
+              file=sys.stderr)
+        return 2
+    try:
+        rec = levels_record(src, command=a.command)
+        atomic_write_text(a.out, json.dumps(rec, separators=(",", ":")) + "\n", overwrite=a.overwrite)
+    except FileExistsError as e:
+        print(f"error: {e}", file=sys.stderr)
+        return 2
+    print(f"wrote {a.out}")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
