@@ -80,3 +80,23 @@ def test_corrected_saving_is_close_to_the_fine_one_away_from_the_wake_plane():
     assert err.max() < 0.045, err.max()
     assert err[yy.ravel() >= 0.9].max() < 0.03, err[yy.ravel() >= 0.9].max()
     assert err_raw > 0.06, err_raw
+
+
+def test_map_metrics_of_the_measurement_script():
+    """formation_env.verification.converged_saving's metrics: one smooth peak counts 1 (2-D and lateral), a
+    ripple on the plane adds maxima; map_errors reads the largest error in units of the reference's peak."""
+    from formation_env.verification.converged_saving import lateral_maxima, local_maxima, map_errors
+
+    y, z = np.linspace(0.7, 1.2, 26), np.linspace(-0.1, 0.3, 21)
+    yy, zz = np.meshgrid(y, z, indexing="ij")
+    smooth = 0.56 * np.exp(-((yy - 0.92) / 0.15) ** 2 - (zz / 0.1) ** 2)
+    rippled = smooth + 0.05 * np.cos(2 * np.pi * yy / 0.1) * np.exp(-(zz / 0.03) ** 2)
+    assert local_maxima(smooth) == 1 and lateral_maxima(smooth) == 1
+    assert local_maxima(rippled) >= 3 and lateral_maxima(rippled) >= 3
+    wind = np.zeros(yy.shape + (3,))
+    wind[..., 1], wind[..., 2] = 0.2 * np.sin(yy), 0.1 + zz
+    ref = {"y_b": y, "z_b": z, "saving": smooth, "load_weighted": wind, "effective_wind": wind}
+    shifted = dict(ref, saving=smooth + 0.0112)
+    e = map_errors(shifted, ref)
+    assert e["saving"] == pytest.approx(0.02, rel=1e-6) and e["saving_off_plane"] == pytest.approx(0.02, rel=1e-6)
+    assert e["load_weighted_y"] == 0.0 and e["local_maxima"] == 1 and e["peak_z_b"] == pytest.approx(0.0)
