@@ -52,8 +52,14 @@ class WakeConfig:
     # or "load_weighted" (consistent with the ELL's loads; the energy tasks'); None: EnvConfig.wake_coupling,
     # else the scenario's (resolve_coupling)
     coupling: str | None = None
+    # the span-efficiency correction of the induced-drag saving (WakeModel saving_scale =
+    # formation_env.wake.converged.span_efficiency_scale: the coarse lattice's 1/nseg bias of the ratio removed);
+    # False: the lattice's own ratio (the thesis, and every default; docs/ell.md "Converged saving")
+    span_correction: bool = False
 
     def __post_init__(self) -> None:
+        if not isinstance(self.span_correction, bool):
+            raise ValueError(f"WakeConfig: span_correction must be True or False, got {self.span_correction!r}")
         if self.coupling is not None and self.coupling not in COUPLINGS:
             raise ValueError(f"WakeConfig: coupling must be None or one of {tuple(COUPLINGS)}, got {self.coupling!r}")
         if not isinstance(self.update_every, int) or self.update_every < 1:
@@ -107,9 +113,15 @@ def wake_vehicle(wake: WakeConfig, coupling: str | None = None) -> Vehicle:
 
 def wake_model_for(wake: WakeConfig, n_vehicles: int, coupling: str | None = None) -> WakeModel | None:
     """The joint ELL model of ``n_vehicles`` Aerosondes as ``wake`` configures it (None: wake off or one UAV);
-    ``coupling`` as :func:`wake_vehicle`'s."""
+    ``coupling`` as :func:`wake_vehicle`'s; with ``wake.span_correction`` its ``saving_scale`` is the vehicle's
+    :func:`~formation_env.wake.converged.span_efficiency_scale`."""
     if not wake.enabled or n_vehicles < 2:
         return None
     vehicle = wake_vehicle(wake, coupling)
+    scale = 1.0
+    if wake.span_correction:
+        from ..wake.converged import span_efficiency_scale
+
+        scale = span_efficiency_scale(vehicle)
     return WakeModel([vehicle] * n_vehicles, core=wake.core, eval_points=wake.eval_points, rotational=wake.rotational,
-                     viscous_aic=wake.viscous_aic)
+                     viscous_aic=wake.viscous_aic, saving_scale=scale)

@@ -41,6 +41,7 @@ class WakeArrays(NamedTuple):
     overlap_core_m: float  # minimum core of the other vehicles' branches, m (WakeModel.overlap_core_m)
     wing_origin_body: np.ndarray  # (3,) wing root quarter chord relative to the CG, body axes, m
     n_panels: int
+    saving_scale: float  # factor on the induced-drag saving (WakeModel.saving_scale; 1.0: the thesis)
 
 
 
@@ -56,7 +57,8 @@ def wake_arrays(model, wing_origin_body) -> WakeArrays:
         grad_w=model.grad_w, vehicle_panel_start=t.vehicle_panel_start, cutoff_m=float(t.cutoff_m),
         core_mode=int(model.core_mode), aic_core_mode=int(model.core_mode if model.viscous_aic else CORE_NONE),
         kinematic_viscosity=float(model.kinematic_viscosity), overlap_core_m=float(model.overlap_core_m),
-        wing_origin_body=np.ascontiguousarray(wing_origin_body, dtype=float), n_panels=int(model.n_panels))
+        wing_origin_body=np.ascontiguousarray(wing_origin_body, dtype=float), n_panels=int(model.n_panels),
+        saving_scale=float(getattr(model, "saving_scale", 1.0)))
 
 
 @nb.njit(cache=True, error_model="numpy")

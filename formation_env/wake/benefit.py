@@ -124,13 +124,16 @@ def induced_drag_saving_one(wake, wake_alone, pos, euler, speed, alpha, beta, ga
     ``out_saving`` (V,) (0 where D_i(alone) is 0). ``gamma_formation`` (N,) is the formation's
     circulation at these poses (from ``evaluate_one``; nothing is solved for the formation here);
     each vehicle's isolated drag solves ``wake_alone`` at its pose (every vehicle must be of the
-    make-up ``wake_alone`` describes). Equal to ``formation_benefit(...)["induced_drag_saving"]``."""
+    make-up ``wake_alone`` describes); times ``wake.saving_scale`` (the span-efficiency correction, 1.0:
+    none). Equal to ``formation_benefit(...)["induced_drag_saving"]``."""
     nv = pos.shape[0]
     d_form = np.empty(nv)
     induced_drag_one(wake, gamma_formation, pos, euler, speed, alpha, beta, d_form, air_density)
     for v in range(nv):
         d_alone = isolated_induced_drag_one(wake_alone, v, pos, euler, speed, alpha, beta, air_density)
         out_saving[v] = 1.0 - d_form[v] / d_alone if abs(d_alone) > 0.0 else 0.0
+        if wake.saving_scale != 1.0:  # the span-efficiency correction (WakeModel saving_scale)
+            out_saving[v] *= wake.saving_scale
 
 
 def induced_drag_saving(model, state, air_density: float = AIR_DENSITY_SL) -> np.ndarray:
@@ -174,4 +177,6 @@ def induced_drag_saving(model, state, air_density: float = AIR_DENSITY_SL) -> np
             for v in range(nv):
                 d_alone = isolated_induced_drag_one(alone[v], v, pos, euler, speed, alpha, beta, air_density)
                 out[b, v] = 1.0 - d_form[v] / d_alone if abs(d_alone) > 0.0 else 0.0
+                if model.saving_scale != 1.0:
+                    out[b, v] *= model.saving_scale
     return out

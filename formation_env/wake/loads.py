@@ -129,6 +129,8 @@ def formation_benefit(model: WakeModel, state: FormationState, solution: WakeSol
     out = {f"d{c}": getattr(form, c) - getattr(alone, c) for c in ("CL", "CD", "CY", "Cl", "Cm", "Cn")}
     with np.errstate(divide="ignore", invalid="ignore"):
         saving = np.where(np.abs(alone.drag_n) > 0, 1.0 - form.drag_n / alone.drag_n, 0.0)
+    if model.saving_scale != 1.0:  # the span-efficiency correction (WakeModel saving_scale)
+        saving = saving * model.saving_scale
     out["induced_drag_saving"] = saving
     out["formation"] = form
     out["isolated"] = alone

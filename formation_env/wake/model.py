@@ -88,6 +88,12 @@ class WakeModel:
         lifting surface it changes nothing. 0 turns it off (the previous law, singular when vehicles
         overlap). A vehicle's own branches on its own points always keep the thesis's law (plain,
         Eq. 4.31 cutoff).
+    saving_scale:
+        Factor on the induced-drag saving (``formation_benefit``'s ``induced_drag_saving``, the compiled
+        :func:`formation_env.wake.benefit.induced_drag_saving_one`): 1.0 (the default, the thesis) leaves it
+        as the lattice gives it; :func:`formation_env.wake.converged.span_efficiency_scale` is the ratio of
+        the coarse to a converged lattice's isolated induced drag per unit lift squared, which removes the
+        coarse lattice's 1/nseg bias of the ratio (docs/ell.md, "Converged saving"). Nothing else changes.
     """
 
     def __init__(
@@ -101,6 +107,7 @@ class WakeModel:
         span_tol: float = 0.1,
         viscous_aic: bool = True,
         overlap_core: float = kernels.OVERLAP_CORE_CHORD_FRACTION,
+        saving_scale: float = 1.0,
     ) -> None:
         vehicles = tuple(vehicles)
         if not vehicles:
@@ -120,8 +127,11 @@ class WakeModel:
             raise ValueError(f"WakeModel: span_tol must be in (0, 1), got {span_tol!r}")
         if not (np.isfinite(overlap_core) and overlap_core >= 0):
             raise ValueError(f"WakeModel: overlap_core must be finite and >= 0, got {overlap_core!r}")
+        if not (np.isfinite(saving_scale) and saving_scale > 0):
+            raise ValueError(f"WakeModel: saving_scale must be finite and > 0, got {saving_scale!r}")
         self.vehicles = vehicles
         self.overlap_core = float(overlap_core)
+        self.saving_scale = float(saving_scale)
         self.core = core
         self.eval_points = eval_points
         self.rotational = rotational
