@@ -6,44 +6,66 @@ by 0.001), so this controller spends its authority across the track and only kee
 station safe. It flies the env's ``setpoints`` action mode (offsets of the thesis PID's demands) from
 the agent's own observation, and it holds whatever slot the scenario defines (the errors are to it).
 
-Design: the set-point offsets as attitude commands. The thesis loops (formation_env.control.law) are
-linear in the offsets: an offset dy starboard shifts the tracker's track-angle demand by Kp_offtrack dy
-and so the bank demand by ``Kp_heading Kp_offtrack dy`` (0.126 rad/m); an offset dz down shifts the
-pitch demand by ``Kp_altitude dz`` (-0.03 rad/m). At zero offset those loops already demand
-``bank_own = -Kp_heading (Kp_offtrack e_y + Ki_offtrack int_offtrack + (Kd_offtrack + 1/V) de_y)`` (the
-heading loop feeds back the ground track, chi - chi_d ~ de_y / V) and ``pitch_own = -Kp_altitude e_z -
-Kd_altitude de_z``. The station keeper chooses the *total* laws
+Design: the set-point offsets as attitude commands, with the thesis's weak attitude loops sped up.
 
-* cross track: ``bank = -(kp_lat e_y + kd_lat de_y + ki_lat int e_y)``;
-* vertical: ``pitch = kp_ver e_z + kd_ver de_z + ki_ver int e_z + kw_ver w_z / V`` (the last term is
-  the vertical-gust feed-forward: a downdraft w_z lowers the angle of attack by w_z / V, and pitching up
-  by as much holds the lift before the aircraft sinks);
+* The thesis loops (formation_env.control.law) map an offset to an attitude demand: an offset dy
+  starboard moves the tracker's track-angle demand by ``Kp_offtrack dy`` (clipped at +-40 deg) and the
+  bank demand by ``Kp_heading`` times that (0.126 rad/m); an offset dz down moves the pitch demand by
+  ``Kp_altitude dz`` (-0.03 rad/m). The keeper inverts them exactly (the tracker's off-track PID, its
+  integrator and the heading loop's, read from the observed controller state, the ground-track feedback
+  ``chi - chi_d ~ de_y / V`` and the 40 deg clip), so it commands the bank and pitch demand it wants.
+* The limit was the attitude loops, not the interface. The thesis bank loop (aileron = -0.2 (phi_d - phi)
+  - 0.1 int + spiral stabiliser 0.2 phi) reaches only half of a bank demand before its slow integrator
+  (~4 s) and the pitch loop under the SAS pitch stabiliser 44 % of a pitch demand, so the old keeper's
+  large PD gains on the demand saturated the offsets (26 % of decisions) and drove a 1-2 rad/s lateral
+  limit cycle (roll and the lateral offset had 70 % of their power at 1-2 rad/s, the lateral velocity
+  error 1.34 m/s RMS at sigma 1, more than the gust). The keeper now closes a lead on the *observed*
+  attitude: it sends ``bank + k_roll (bank - phi)`` and ``pitch + k_pitch (pitch - (theta - theta_trim))``,
+  so the thesis loops track its designed attitude (k_roll 20: the bank error becomes the aileron's
+  main input).
+* cross track, a cascade: a lateral velocity demand ``v = clip(-kp_lateral e_y, +-v_lateral_max)``, a bank
+  ``clip(kd_lateral (v - de_y) - ki_lateral int e_y + kw_lateral w_y, +-bank_max)`` (w_y the ambient
+  lateral wind), then the roll lead;
+* vertical: ``pitch = kp_vertical e_z + kd_vertical de_z + ki_vertical int e_z + kw_vertical w_z / V``
+  (the vertical-gust feed-forward: a downdraft w_z lowers the angle of attack by w_z / V, and pitching up
+  by as much holds the lift before the aircraft sinks), then the pitch lead.
 
-and commands the difference, ``dy = (bank - bank_own) / 0.126``, ``dz = (pitch - pitch_own) / -0.03``
-(the tracker's own off-track integral is cancelled from the observed controller state, so it cannot wind
-up against the offsets). Along track it keeps ``pid_formation``'s law (speed feed-forward of the
-measured along-track wind, PD + I on the slot error; the part beyond the +-2 m/s speed channel goes to
-the along-track offset through the tracker's ``Kp_alongtrack``), with two safety terms:
+Along track it keeps ``pid_formation``'s law (speed feed-forward of the measured along-track wind, PD + I on
+the slot error; the part beyond the +-2 m/s speed channel goes to the along-track offset through the
+tracker's ``Kp_alongtrack``), with three safety terms:
 
 * energy trade beyond a dead band, both ways: more than ``lag_deadband_m`` behind, descend ``k_energy``
   m per m (height into speed, when the throttle is saturated); ahead, climb (the only brake once the
   throttle is closed); inside the band nothing disturbs the vertical precision;
+* airspeed floor: slower than trim - ``speed_floor_mps`` (the brakes of an overtaking follower), the speed
+  demand rises and the height demand falls ``k_stall`` (m/s, m) per m/s;
 * separation guard: once the nearest other UAV is less than ``guard_m`` ahead along the track (the slot
-  is 2 spans = 5.8 m behind), the demand moves ``k_guard`` m per m away from it across the track and the
-  speed demand drops ``k_guard`` m/s per m, so an overtaking follower passes beside the leader, not into it.
+  is 2 spans = 5.8 m behind) the *target* moves away from it, ``guard_lateral_m`` across the track and
+  ``guard_vertical_m`` down times ``min(depth / guard_m, 1)^2`` (depth: m inside the guard; the full shift
+  once it is beside or behind), and the speed demand drops ``k_guard`` m/s per m: an overtaking follower
+  passes beside and below the leader. A target shift, not added loop stiffness: a push proportional to the
+  lateral separation made the overtaking follower's lateral loop oscillate into the leader; the square
+  keeps the small forward excursions of ordinary station keeping nearly free of it.
 
 Every output saturates at the action bounds and the integrators stop while their channel is saturated.
 
-Gains (chosen on training seeds 1-60 only, frozen von Karman turbulence sigma 1 m/s and calm air, wake
-on; docs/close_formation.md has the tables): the thesis's own laws are bank 0.126 e_y + 0.45 de_y and
-pitch 0.03 e_z + 0.05 de_z (a dominant lateral pole near 0.3 rad/s). Vertical: raising the pitch gains
-4x (0.12 rad/m, 0.2 rad per m/s) and feeding forward the vertical gust took the vertical RMS at sigma 1
-from 1.2 m to 0.21 m (grid kp 0.03-0.12 x kd 0.05-0.2 x kw 0/1). Lateral: the grid kp 0.1-0.35 x kd
-0.15-1.0 x ki 0.02-0.05 showed that the lateral error is set by the damping, not the stiffness: lower
-damping than the thesis's 0.45 or higher stiffness without more damping drove 2-4 m limit cycles; kp 0.2,
-kd 1.0, ki 0.05 was best. Along: kd_along 2.5 (against pid_formation's 1.5) and the guard (5 m, 1.5)
-removed the collisions found on training seeds 21-60 (a follower that had fallen 20 m behind closing at
-2 m/s and overtaking beside the leader in a lateral limit cycle).
+Gains, chosen on training seeds 1-200 only (frozen von Karman turbulence, wake on; sigma 1 on seeds 1-40
+for precision, sigma 1.5 on seeds 1-200 for safety, calm and sigma 0.5 on seeds 1-40 as checks;
+docs/close_formation.md has the numbers): k_roll 0 -> 1 -> 3 -> 9 -> 20 took the sigma-1 harvest on seeds 1-20
+from 0.04 (the cascade without the lead) to 0.51, 0.72, 0.78, 0.80 (40 flattens it). At 20 the bank loop
+runs nearly as a relay around the designed bank (the lateral offset moves 0.62 of its range per decision,
+RMS; k_roll 10: 0.24, harvest 0.77, lateral RMS 0.41 m against 0.32 m). Around it the cascade gains are on a
+plateau (kp_lateral 0.35-0.7, kd_lateral 0.15-0.3, v_lateral_max 1-2, bank_max 0.35-0.7: harvest
+0.774-0.785 on seeds 1-40); roll-rate damping (k_roll_rate 0.5-4) and the lateral integral (0.02, 0.05)
+cost 0.01-0.06 (the rate, sampled at 10 Hz, adds chatter); the lateral-wind feed-forward against the gust
+costs (0.05: 0.74 -> 0.48), with it (0.02) it gains 0.025 harvest and loses 0.07 m of lateral RMS, so it is
+off: the slot error hardly correlates with the lateral gust (-0.12 for e_y, 0.02 for de_y), as the leader,
+0.23 s ahead in the same frozen field, drifts with the same gust. Vertical: k_pitch 1 with kp 0.2, kd 0.3
+took the vertical RMS from 0.16 to 0.10 m. The guard and the airspeed floor removed the collisions at
+sigma 1.5 (with the new laws: 2 in seeds 1-40 with a push proportional to the separation shortfall, 1 in
+101-200 with the lateral shift alone; 0 in 1-200 now): overtaking followers, up to 12 m ahead of the slot
+at 5-7 m/s below trim airspeed (a tail gust beyond the +-2 m/s speed channel), whose lateral loop
+oscillated beside the leader.
 """
 
 from __future__ import annotations
@@ -63,20 +85,29 @@ from .pid_formation import inverse_slog
 
 __all__ = ["StationKeeperGains", "StationKeeper"]
 
+#: the trim pitch attitude the thesis altitude loop demands at zero error (trim(25 m/s, 1000 m): alpha = theta)
+TRIM_THETA_RAD = 0.0564
+
 
 @dataclass(frozen=True)
 class StationKeeperGains:
-    """Gains of :class:`StationKeeper` (SI: m, m/s, s, rad). The cross-track and vertical gains are the
-    *total* attitude-demand laws the follower flies (the thesis loops' own terms are subtracted)."""
+    """Gains of :class:`StationKeeper` (SI: m, m/s, s, rad). The cross-track and vertical gains make the
+    attitude the follower is to fly (the thesis loops are inverted to command it, through the leads)."""
 
-    # cross track (starboard y): bank demand, rad per m / (m/s) / (m s) of slot error
-    kp_lateral: float = 0.2
-    kd_lateral: float = 1.0
-    ki_lateral: float = 0.05
+    # cross track (starboard y), a cascade: slot error -> lateral velocity demand -> bank -> roll
+    kp_lateral: float = 0.5  # lateral velocity demand, (m/s) per m of slot error (1/s)
+    v_lateral_max: float = 2.0  # its limit, m/s
+    kd_lateral: float = 0.2  # bank demand, rad per m/s of lateral velocity error
+    ki_lateral: float = 0.0  # bank demand, rad per m s of slot error
+    bank_max: float = 0.5  # limit of the designed bank, rad
+    k_roll: float = 20.0  # roll lead: rad of extra bank demand per rad of bank short of the designed one
+    k_roll_rate: float = 0.0  # roll damping: rad of bank demand per rad/s of roll rate
+    kw_lateral: float = 0.0  # lateral-wind feed-forward: rad of bank per m/s of ambient wind (with the gust)
     # vertical (down z): pitch demand about trim, rad per m / (m/s) / (m s) of slot error
-    kp_vertical: float = 0.12
-    kd_vertical: float = 0.2
+    kp_vertical: float = 0.2
+    kd_vertical: float = 0.3
     ki_vertical: float = 0.01
+    k_pitch: float = 1.0  # pitch lead: rad of extra pitch demand per rad of pitch short of the designed one
     kw_vertical: float = 1.0  # fraction of the vertical-gust angle of attack w_z / V fed forward in pitch
     # along track: speed-demand offset (m/s) per m / (m/s) / (m s), fraction of along-track wind fed forward
     wind_feedforward: float = 1.0
@@ -86,10 +117,17 @@ class StationKeeperGains:
     # energy trade (m of descent per m of lag beyond lag_deadband_m): cross-track precision first
     k_energy: float = 0.5
     lag_deadband_m: float = 3.0
-    # separation guard: the nearest other UAV less than guard_m ahead along the track -> k_guard m of
-    # offset away from it across the track (and k_guard m/s less speed) per m inside the guard
+    # separation guard: the nearest other UAV less than guard_m ahead along the track -> the target moves
+    # away from it across the track by guard_lateral_m and down by guard_vertical_m, times the ramp
+    # min(depth / guard_m, 1)^2 (depth: m inside the guard; the full shift once it is beside), and the speed
+    # demand drops k_guard m/s per m inside the guard
     guard_m: float = 5.0
     k_guard: float = 1.5
+    guard_lateral_m: float = 2.0
+    guard_vertical_m: float = 1.0
+    # airspeed floor: below trim - speed_floor_mps the brakes (speed cut, climb) give way, k_stall per m/s
+    speed_floor_mps: float = 4.0
+    k_stall: float = 2.0
 
     def __post_init__(self) -> None:
         check_gains(self)
@@ -134,34 +172,49 @@ class StationKeeper(RowIntegrators):
         integ = self.integral
         cstate = inverse_slog(groups["controller_state"], 1.0)
         tr, ap, v = self.tracker, self.autopilot, self.airspeed_mps
-        # the designed total laws ...
-        bank = -(g.kp_lateral * err[:, 1] + g.kd_lateral * derr[:, 1] + g.ki_lateral * integ[:, 1])
-        pitch = (g.kp_vertical * err[:, 2] + g.kd_vertical * derr[:, 2] + g.ki_vertical * integ[:, 2]
-                 + g.kw_vertical * wind[:, 2] / v)
-        # ... minus what the thesis loops already demand at zero offset (tracker PID on the off-track
-        # error through the heading P on the ground track; altitude PD), so the offset carries the rest
-        own_bank = -ap.Kp_heading * (tr.Kp_offtrack * err[:, 1] + tr.Ki_offtrack * cstate[:, 5]
-                                     + (tr.Kd_offtrack + 1.0 / v) * derr[:, 1])
-        own_pitch = -ap.Kp_altitude * err[:, 2] - ap.Kd_altitude * derr[:, 2]
-        dy = (bank - own_bank) / self.bank_per_m
-        # energy trade beyond the dead band, both ways: behind, descend (height into speed); ahead, climb
-        # (speed into height: the only brake once the throttle is closed)
-        excess = np.maximum(np.abs(err[:, 0]) - g.lag_deadband_m, 0.0) * np.sign(-err[:, 0])
-        dz = (pitch - own_pitch) / self.pitch_per_m + g.k_energy * excess
-        # separation guard: once the nearest other UAV is less than guard_m ahead along the track (the
-        # slot is 2 spans behind), the demand moves away from it across the track, k_guard m per m inside
-        # the guard, and the speed demand drops as much: overtaking beside the leader stays clear of it
+        # separation guard: once the nearest other UAV is less than guard_m ahead along the track (the slot
+        # is 2 spans behind), the target moves away from it across the track and down (a target shift, not
+        # added loop stiffness), and the speed demand drops k_guard m/s per m inside the guard
         nb = groups.get("neighbours")
-        if nb is not None and nb.shape[1] >= 6 and g.k_guard > 0:
+        e_y, e_z = err[:, 1].copy(), err[:, 2].copy()
+        if nb is not None and nb.shape[1] >= 6:
             rel = inverse_slog(nb.reshape(nb.shape[0], -1, 6)[:, :, :3], NEIGHBOUR_POSITION_SCALE_M)
             j = np.argmin(np.linalg.norm(rel, axis=2), axis=1)
             near = rel[np.arange(len(j)), j]
             depth = np.clip(g.guard_m - near[:, 0], 0.0, 2.0 * g.guard_m)
-            dy = dy + g.k_guard * depth * np.where(near[:, 1] > 0, -1.0, 1.0)
+            ramp = np.minimum(depth / g.guard_m, 1.0) ** 2
+            e_y = e_y - g.guard_lateral_m * ramp * np.where(near[:, 1] > 0, -1.0, 1.0)
+            e_z = e_z - g.guard_vertical_m * ramp
         else:
-            depth = np.zeros(len(dy))
+            depth = np.zeros(len(e_y))
+        phi, p_rate = groups["attitude"][:, 0] * 0.5, groups["rates"][:, 0]
+        # cross track: slot error -> lateral velocity demand -> designed bank -> bank demand sent (roll lead)
+        v_des = np.clip(-g.kp_lateral * e_y, -g.v_lateral_max, g.v_lateral_max)
+        bank_raw = g.kd_lateral * (v_des - derr[:, 1]) - g.ki_lateral * integ[:, 1] + g.kw_lateral * wind[:, 1]
+        bank = np.clip(bank_raw, -g.bank_max, g.bank_max)
+        bank_sent = bank + g.k_roll * (bank - phi) - g.k_roll_rate * p_rate
+        # invert the thesis loops: phi_dem = Kp_heading (chi_d - clip(raw) - chi) + Ki_heading int_heading,
+        # raw = Kp_offtrack (e_y - dy) + Ki_offtrack int_offtrack + Kd_offtrack de_y, chi - chi_d ~ de_y / V
+        lim = tr.track_angle_demand_limit_rad
+        r_star = np.clip(-(bank_sent - ap.Ki_heading * cstate[:, 4]) / ap.Kp_heading - derr[:, 1] / v, -lim, lim)
+        dy = err[:, 1] + (tr.Ki_offtrack * cstate[:, 5] + tr.Kd_offtrack * derr[:, 1] - r_star) / tr.Kp_offtrack
+        lat_sat = np.abs(bank_raw) > g.bank_max
+        # vertical: the designed pitch about trim, sent with the pitch lead, minus what the thesis altitude PD
+        # already demands at zero offset (the offset carries the rest through Kp_altitude)
+        pitch = (g.kp_vertical * e_z + g.kd_vertical * derr[:, 2] + g.ki_vertical * integ[:, 2]
+                 + g.kw_vertical * wind[:, 2] / v)
+        pitch = pitch + g.k_pitch * (pitch - (groups["attitude"][:, 1] * 0.5 - TRIM_THETA_RAD))
+        own_pitch = -ap.Kp_altitude * err[:, 2] - ap.Kd_altitude * derr[:, 2]
+        # energy trade beyond the dead band, both ways: behind, descend (height into speed); ahead, climb
+        # (speed into height: the only brake once the throttle is closed)
+        excess = np.maximum(np.abs(err[:, 0]) - g.lag_deadband_m, 0.0) * np.sign(-err[:, 0])
+        dz = (pitch - own_pitch) / self.pitch_per_m + g.k_energy * excess
         dv = (-g.wind_feedforward * wind[:, 0] - g.kp_along * err[:, 0] - g.kd_along * derr[:, 0]
               - g.ki_along * integ[:, 0]) - g.k_guard * depth
+        # airspeed floor: slower than trim - speed_floor_mps, demand speed back and trade height for it
+        slow = np.maximum(-groups["air_data"][:, 0] * 5.0 - g.speed_floor_mps, 0.0)
+        dv = dv + g.k_stall * slow
+        dz = dz + g.k_stall * slow
         # the speed demand beyond the speed channel's range goes through the tracker's along-track P
         # (V_demand = |V_d| - Kp_alongtrack ATD: a demand dx ahead adds Kp_alongtrack dx)
         over = dv - np.clip(dv, -SETPOINT_SPEED_SCALE_MPS, SETPOINT_SPEED_SCALE_MPS)
@@ -170,6 +223,8 @@ class StationKeeper(RowIntegrators):
                         dv / SETPOINT_SPEED_SCALE_MPS], axis=1)
         act = np.clip(raw, -1.0, 1.0)
         free = np.abs(raw[:, [3, 1, 2]]) < 1.0
+        free[:, 1] &= ~lat_sat
         unwind = np.sign(raw[:, [3, 1, 2]]) * err > 0
+        unwind[:, 1] = np.sign(bank_raw) * err[:, 1] > 0
         self.integral += np.where(free | unwind, err * dt, 0.0)
         return np.nan_to_num(act).astype(np.float32)

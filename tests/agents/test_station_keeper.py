@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from agents.pid_formation import PIDFormation
-from agents.station_keeper import StationKeeper, StationKeeperGains
+from agents.station_keeper import TRIM_THETA_RAD, StationKeeper, StationKeeperGains
 from formation_env.control.gains import AutopilotGains, TrackerGains
 from formation_env.envs.observations import group_sizes, observation_size, slog
 
@@ -17,13 +17,18 @@ N_VEHICLES = 2
 SLOT_LEADER_M = (5.8, -2.8, -0.3)  # the leader relative to a follower in the slot (slot frame, m)
 
 
-def _obs(err=(0.0, 0.0, 0.0), derr=(0.0, 0.0, 0.0), wind=(0.0, 0.0, 0.0), leader=SLOT_LEADER_M, n=1):
-    """A 2-UAV observation with the given slot errors (m), velocity errors (m/s), ambient wind (m/s) and
-    the leader's position relative to the follower (m)."""
+def _obs(err=(0.0, 0.0, 0.0), derr=(0.0, 0.0, 0.0), wind=(0.0, 0.0, 0.0), leader=SLOT_LEADER_M, n=1, phi=0.0,
+         theta=TRIM_THETA_RAD, dv_air=0.0):
+    """A 2-UAV observation with the given slot errors (m), velocity errors (m/s), ambient wind (m/s), the
+    leader's position relative to the follower (m), bank and pitch (rad) and airspeed minus trim (m/s)."""
     obs = np.zeros((n, observation_size(N_VEHICLES)))
     k = 0
     for name, size in group_sizes(N_VEHICLES).items():
-        if name == "slot_position_error":
+        if name == "air_data":
+            obs[:, k] = dv_air / 5.0
+        elif name == "attitude":
+            obs[:, k:k + 2] = np.array([phi, theta]) / 0.5
+        elif name == "slot_position_error":
             obs[:, k:k + size] = slog(np.asarray(err, float), 1.0)
         elif name == "slot_velocity_error":
             obs[:, k:k + size] = slog(np.asarray(derr, float), 1.0)
@@ -36,11 +41,13 @@ def _obs(err=(0.0, 0.0, 0.0), derr=(0.0, 0.0, 0.0), wind=(0.0, 0.0, 0.0), leader
 
 
 def _thesis_gains(airspeed=25.0):
-    """Gains whose total law equals the thesis loops' own (so every offset is zero)."""
+    """Gains whose total law equals the thesis loops' own, no leads (so every offset is zero): bank =
+    -kd (kp e_y + de_y) is the tracker's off-track PD through the heading loop on the ground track."""
     tr, ap = TrackerGains(), AutopilotGains()
-    return StationKeeperGains(kp_lateral=ap.Kp_heading * tr.Kp_offtrack,
-                              kd_lateral=ap.Kp_heading * (tr.Kd_offtrack + 1.0 / airspeed), ki_lateral=0.0,
-                              kp_vertical=-ap.Kp_altitude, kd_vertical=-ap.Kd_altitude, ki_vertical=0.0,
+    kd = ap.Kp_heading * (tr.Kd_offtrack + 1.0 / airspeed)
+    return StationKeeperGains(kp_lateral=ap.Kp_heading * tr.Kp_offtrack / kd, kd_lateral=kd, ki_lateral=0.0,
+                              v_lateral_max=100.0, bank_max=10.0, k_roll=0.0,
+                              kp_vertical=-ap.Kp_altitude, kd_vertical=-ap.Kd_altitude, ki_vertical=0.0, k_pitch=0.0,
                               kw_vertical=0.0, wind_feedforward=0.0, kp_along=0.0, kd_along=0.0, ki_along=0.0,
                               k_energy=0.0)
 
@@ -56,22 +63,31 @@ def test_signs_and_magnitudes():
     agent = StationKeeper()
     g = agent.gains
     tr, ap = TrackerGains(), AutopilotGains()
-    # 0.1 m starboard of the slot: bank to port, i.e. a port position-demand offset of
-    # (g.kp - Kp_heading Kp_offtrack) e / (Kp_heading Kp_offtrack)
-    a = agent.act(_obs(err=(0.0, 0.1, 0.0)))[0]
-    expect_dy = -(g.kp_lateral - ap.Kp_heading * tr.Kp_offtrack) * 0.1 / (ap.Kp_heading * tr.Kp_offtrack)
+    # 0.02 m starboard of the slot, wings level: bank to port, -kd kp e, sent with the roll lead (1 + k_roll)
+    # through the heading loop and the tracker's off-track P: a port position-demand offset
+    a = agent.act(_obs(err=(0.0, 0.02, 0.0)))[0]
+    bank_sent = -(1.0 + g.k_roll) * g.kd_lateral * g.kp_lateral * 0.02
+    expect_dy = 0.02 + bank_sent / (ap.Kp_heading * tr.Kp_offtrack)
     assert a[1] == pytest.approx(expect_dy / 5.0, rel=1e-4)
     assert a[1] < 0
+    # already banked as designed: the lead adds nothing
+    agent.reset(1)
+    banked = agent.act(_obs(err=(0.0, 0.02, 0.0), phi=-g.kd_lateral * g.kp_lateral * 0.02))[0]
+    assert banked[1] == pytest.approx((0.02 + bank_sent / (1.0 + g.k_roll) / (ap.Kp_heading * tr.Kp_offtrack)) / 5.0,
+                                      rel=1e-4)
+    # the track-angle demand saturates at 40 deg: a large error saturates the offset, never flips its sign
+    agent.reset(1)
+    assert agent.act(_obs(err=(0.0, 3.0, 0.0)))[0, 1] < 0
     # 0.1 m below the slot (z down > 0): pitch up = demand a higher point (negative down offset)
     agent.reset(1)
     a = agent.act(_obs(err=(0.0, 0.0, 0.1)))[0]
-    expect_dz = (g.kp_vertical + ap.Kp_altitude) * 0.1 / ap.Kp_altitude
+    expect_dz = ((1.0 + g.k_pitch) * g.kp_vertical + ap.Kp_altitude) * 0.1 / ap.Kp_altitude
     assert a[2] == pytest.approx(expect_dz / 5.0, rel=1e-4)
     assert a[2] < 0
-    # a 1 m/s downdraft: pitch up by w/V before it sinks the aircraft
+    # a 1 m/s downdraft: pitch up by w/V (with the pitch lead) before it sinks the aircraft
     agent.reset(1)
     a = agent.act(_obs(wind=(0.0, 0.0, 1.0)))[0]
-    assert a[2] == pytest.approx(g.kw_vertical * (1.0 / 25.0) / ap.Kp_altitude / 5.0, rel=1e-4)
+    assert a[2] == pytest.approx((1.0 + g.k_pitch) * g.kw_vertical * (1.0 / 25.0) / ap.Kp_altitude / 5.0, rel=1e-4)
     # a head wind of 1 m/s (wind along -x): more airspeed demanded
     agent.reset(1)
     assert agent.act(_obs(wind=(-1.0, 0.0, 0.0)))[0, 3] == pytest.approx(g.wind_feedforward / 2.0, rel=1e-4)
@@ -86,15 +102,36 @@ def test_signs_and_magnitudes():
 
 def test_separation_guard_moves_away_from_an_overtaken_leader():
     g = StationKeeper().gains
+    tr, ap = TrackerGains(), AutopilotGains()
     clear = StationKeeper().act(_obs())[0]
-    # the leader only 3.5 m ahead and 2.8 m to port: the demand moves to starboard and the speed drops
-    close = StationKeeper().act(_obs(leader=(3.5, -2.8, -0.3)))[0]
-    depth = g.guard_m - 3.5
-    assert close[1] - clear[1] == pytest.approx(g.k_guard * depth / 5.0, rel=1e-4)
-    assert close[3] < clear[3]
-    # mirrored: a leader to starboard pushes the demand to port
-    port = StationKeeper().act(_obs(leader=(3.5, 2.8, -0.3)))[0]
-    assert port[1] - clear[1] == pytest.approx(-g.k_guard * depth / 5.0, rel=1e-4)
+    np.testing.assert_allclose(clear[:3], 0.0, atol=1e-6)  # on the slot, the leader 5.8 m ahead: no guard
+    # the leader only 4 m ahead and 2.8 m to port: the target moves to starboard by guard_lateral_m and down
+    # by guard_vertical_m, times the ramp (depth / guard_m)^2, and the speed demand drops
+    close = StationKeeper().act(_obs(leader=(4.0, -2.8, -0.3)))[0]
+    ramp = ((g.guard_m - 4.0) / g.guard_m) ** 2
+    bank_sent = (1.0 + g.k_roll) * g.kd_lateral * g.kp_lateral * g.guard_lateral_m * ramp
+    assert close[1] == pytest.approx(bank_sent / (ap.Kp_heading * tr.Kp_offtrack) / 5.0, rel=1e-4)
+    pitch = -(1.0 + g.k_pitch) * g.kp_vertical * g.guard_vertical_m * ramp
+    assert close[2] == pytest.approx(pitch / ap.Kp_altitude / 5.0, rel=1e-4)
+    assert close[1] > 0 and close[2] > 0 and close[3] < clear[3]
+    # mirrored: a leader to starboard pushes the demand to port (and still down)
+    port = StationKeeper().act(_obs(leader=(4.0, 2.8, -0.3)))[0]
+    assert port[1] == pytest.approx(-close[1], rel=1e-4) and port[2] == pytest.approx(close[2], rel=1e-4)
+    # beside the leader: the full shift, further away still
+    beside = StationKeeper().act(_obs(leader=(-1.0, -2.8, -0.3)))[0]
+    assert beside[1] > close[1] and beside[2] > close[2] and beside[3] < close[3]
+
+
+def test_airspeed_floor_stops_the_brakes():
+    g = StationKeeper().gains
+    ahead = (g.lag_deadband_m + 1.0, 0.0, 0.0)  # ahead of the slot beyond the dead band: slow down, climb
+    normal = StationKeeper().act(_obs(err=ahead))[0]
+    slow = StationKeeper().act(_obs(err=ahead, dv_air=-(g.speed_floor_mps + 1.0)))[0]
+    assert normal[3] < 0 and normal[2] < 0
+    assert slow[3] - normal[3] == pytest.approx(g.k_stall / 2.0, rel=1e-4)
+    assert slow[2] - normal[2] == pytest.approx(g.k_stall / 5.0, rel=1e-4)
+    # above the floor nothing changes
+    assert StationKeeper().act(_obs(err=ahead, dv_air=-(g.speed_floor_mps - 0.5)))[0] == pytest.approx(normal)
 
 
 def test_bounded_finite_and_integrators_unwind():
@@ -167,5 +204,8 @@ def test_beats_pid_formation_across_the_track_in_turbulence():
     cross = [math.hypot(e["rms_lateral_m"], e["rms_vertical_m"]) for e in sk]
     cross_pf = [math.hypot(e["rms_lateral_m"], e["rms_vertical_m"]) for e in pf]
     assert not any(e["collision"] for e in sk)
-    assert np.mean(cross) < 0.8 * np.mean(cross_pf)
+    assert np.mean(cross) < 0.5 * np.mean(cross_pf)
+    # the attitude leads hold the slot to well inside the saving's 0.29 m half-width across the track
+    assert np.mean([e["rms_lateral_m"] for e in sk]) < 0.6
+    assert np.mean([e["harvest_ratio"] for e in sk]) > 0.6
     assert np.mean([e["induced_drag_saving"] for e in sk]) > np.mean([e["induced_drag_saving"] for e in pf])
