@@ -203,8 +203,8 @@ class Randomisation:
     leader_fuel_offset_min_kg, leader_fuel_offset_max_kg: the leader's initial fuel is the trim's 2 kg plus an
         offset drawn uniformly in [min, max] kg per episode (its weight: AeroSim mass = 8.5 kg empty + fuel), and
         it starts trimmed for it. Both 0: off.
-    These three are drawn after every other draw of the episode, so turning them on keeps its wind,
-    manoeuvre and turbulence; the leader (and, at another speed, every UAV) starts in trim with its flight
+    These are drawn after every other draw of the episode, so turning them on keeps its wind,
+    manoeuvre and turbulence (the field's seed is drawn only with turbulence: a calm episode draws another leader); the leader (and, at another speed, every UAV) starts in trim with its flight
     control's integrators settled there (:meth:`formation_env.sim.Simulation.reset`).
     """
 
