@@ -19,7 +19,7 @@ from typing import NamedTuple
 import numba as nb
 
 __all__ = ["FCSParams", "fcs_params", "fcs_law", "fcs_update", "fcs_law_batch", "CSTATE_NAMES", "N_CSTATE",
-           "SIGNAL_NAMES"]
+           "SIGNAL_NAMES", "settled_controller"]
 
 SIGNAL_NAMES = ("speed_demand", "track_angle_demand", "theta_demand", "phi_demand", "elevator_demand",
                 "aileron_demand", "along_track", "off_track", "off_track_rate", "track_demand")
@@ -94,6 +94,31 @@ def fcs_params(config, dt_s: float) -> FCSParams:
         dt_s=float(dt_s), use_tracker=bool(config.use_tracker), anti_windup=bool(config.anti_windup),
         interlink_from_demand=st.interlink_source == "demand", washout_time_constant=st.washout == "time_constant",
         feedback_heading=st.direction_feedback == "heading", interlink_in_yaw_damper=st.interlink_path == "yaw_damper")
+
+
+def settled_controller(p: FCSParams, controls, theta_rad: float, phi_rad: float, yaw_rate_rad_s: float):
+    """Controller state (N_CSTATE,) with which :func:`fcs_law`, flying an aircraft trimmed at ``controls``
+    (elevator, aileron, rudder rad, throttle), pitch ``theta_rad`` and bank ``phi_rad`` with no tracking error,
+    commands that trim: each integrator holds its loop's difference from the law's own trim (``p.trim_*``), so an
+    aircraft trimmed for another weight or speed starts settled instead of winding its integrators up in flight
+    (the altitude loop's Ki is 1e-4: that takes minutes). The rudder has no integrator (its trim difference,
+    from the engine torque, is left to the yaw damper); the washout starts on the yaw rate."""
+    import numpy as np
+
+    c = np.zeros(N_CSTATE)
+    d_theta = float(theta_rad) - p.trim_theta_rad
+    if p.Ki_speed:
+        c[_INT_SPEED] = (float(controls[3]) - p.trim_throttle) / p.Ki_speed
+    if p.Ki_altitude:
+        c[_INT_ALT] = d_theta / p.Ki_altitude
+    if p.Ki_theta:
+        c[_INT_THETA] = (float(controls[0]) - p.trim_elevator + p.K_theta_elevator * d_theta) / p.Ki_theta
+    if p.Ki_heading:
+        c[_INT_HEADING] = float(phi_rad) / p.Ki_heading
+    if p.Ki_phi:
+        c[_INT_PHI] = (float(controls[1]) - p.trim_aileron + p.K_phi_aileron * float(phi_rad)) / p.Ki_phi
+    c[_WASHOUT] = float(yaw_rate_rad_s)
+    return c
 
 
 @_jit

@@ -78,6 +78,16 @@ OPTION_RANGES: dict[str, tuple[float, float, str, str]] = {
                                      "1000 m altitude, so a descent stays clear of the ground"),
     "Randomisation.leader_speed_mps": (0.0, 10.0, "m/s", "speed change of the leader's manoeuvre: 25 +- 10 m/s "
                                        "stays inside the model's 15-50 m/s airspeed bounds"),
+    "Randomisation.leader_speed_offset_min_mps": (-5.0, 0.0, "m/s", "lower end of the leader's per-episode speed "
+                                                  "offset from the scenario's 25 m/s: the Aerosonde trims at 20-30 m/s at "
+                                                  "1000 m (heavy and slow its elevator nears the 25 deg limit)"),
+    "Randomisation.leader_speed_offset_max_mps": (0.0, 5.0, "m/s", "upper end of the leader's per-episode speed "
+                                                  "offset (fast, the throttle nears 1: at 28 m/s it is 0.99-1.04)"),
+    "Randomisation.leader_fuel_offset_min_kg": (-1.5, 0.0, "kg", "lower end of the leader's per-episode fuel offset "
+                                                "from the trim's 2 kg: 0.5 kg left at least (an empty tank stops the "
+                                                "engine; 9.0 kg with AeroSim's 8.5 kg empty mass)"),
+    "Randomisation.leader_fuel_offset_max_kg": (0.0, 3.0, "kg", "upper end of the leader's per-episode fuel offset: "
+                                                "5 kg, AeroSim's capacity (13.5 kg gross)"),
 }
 
 
@@ -184,6 +194,18 @@ class Randomisation:
     leader_turn_deg, leader_climb_m, leader_speed_mps: amplitude of one random manoeuvre of the
         reference (heading change, altitude change, speed change), each drawn uniformly in +-amplitude
         and started at a random time in the first half of the episode.
+    leader_speed_offset_min_mps, leader_speed_offset_max_mps: the leader's speed from the start: the reference
+        path's speed is the scenario's (25 m/s) plus an offset drawn uniformly in [min, max] per episode (the
+        manoeuvre's speed change adds to it); every UAV starts trimmed at it. Both 0: off; with
+        leader_speed_mps at most 10 m/s from 25 in all (the model's 15-50 m/s). The Aerosonde trims at 1000 m
+        from 20 to 30 m/s at every fuel load, but at 28 m/s its throttle is at 1 (0.99 at 2 kg, 1.04 at 5 kg: no
+        margin) and at 21 m/s with 5 kg its elevator at -23 deg of its 25 (measured with aircraft.trim).
+    leader_fuel_offset_min_kg, leader_fuel_offset_max_kg: the leader's initial fuel is the trim's 2 kg plus an
+        offset drawn uniformly in [min, max] kg per episode (its weight: AeroSim mass = 8.5 kg empty + fuel), and
+        it starts trimmed for it. Both 0: off.
+    These are drawn after every other draw of the episode, so turning them on keeps its wind,
+    manoeuvre and turbulence (the field's seed is drawn only with turbulence: a calm episode draws another leader); the leader (and, at another speed, every UAV) starts in trim with its flight
+    control's integrators settled there (:meth:`formation_env.sim.Simulation.reset`).
     """
 
     initial_offset_m: float = 0.0
@@ -195,13 +217,39 @@ class Randomisation:
     leader_turn_deg: float = 0.0
     leader_climb_m: float = 0.0
     leader_speed_mps: float = 0.0
+    leader_speed_offset_min_mps: float = 0.0
+    leader_speed_offset_max_mps: float = 0.0
+    leader_fuel_offset_min_kg: float = 0.0
+    leader_fuel_offset_max_kg: float = 0.0
 
     def __post_init__(self) -> None:
         _validate_fields(self)
+        a, b = self.leader_speed_offset_min_mps, self.leader_speed_offset_max_mps
+        if max(abs(a), abs(b)) + self.leader_speed_mps > 10.0:
+            raise ValueError(f"Randomisation: the leader's speed offset plus leader_speed_mps must stay within 10 m/s "
+                             f"of 25 (the model's 15-50 m/s airspeed bounds), got offsets [{a!r}, {b!r}] and "
+                             f"leader_speed_mps {self.leader_speed_mps!r}")
 
     @property
     def any_manoeuvre(self) -> bool:
-        return self.leader_turn_deg > 0 or self.leader_climb_m > 0 or self.leader_speed_mps > 0
+        """The reference path is integrated (a manoeuvre or a per-episode base speed)."""
+        return (self.leader_turn_deg > 0 or self.leader_climb_m > 0 or self.leader_speed_mps > 0
+                or self.random_speed)
+
+    @property
+    def random_leader(self) -> bool:
+        """The leader's weight or speed is drawn per episode (and the UAVs start trimmed for it)."""
+        return self.random_speed or self.random_fuel
+
+    @property
+    def random_fuel(self) -> bool:
+        """The leader's fuel (weight) is drawn per episode."""
+        return (self.leader_fuel_offset_min_kg, self.leader_fuel_offset_max_kg) != (0.0, 0.0)
+
+    @property
+    def random_speed(self) -> bool:
+        """The leader's speed is drawn per episode."""
+        return (self.leader_speed_offset_min_mps, self.leader_speed_offset_max_mps) != (0.0, 0.0)
 
 
 @dataclass(frozen=True)

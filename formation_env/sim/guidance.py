@@ -29,13 +29,14 @@ def reference_path(sc, t, ref_pos, manoeuvre, out_pos, out_vel):
     """Vehicle 0's demanded position and velocity (NED) at time t: straight and level north at the
     trim speed, or, with randomised manoeuvres, the integrated path ``ref_pos`` turning, climbing
     and changing speed at fixed rates from manoeuvre = (start s, heading change rad, altitude change
-    m, speed change m/s)."""
+    m, speed change m/s, base speed offset m/s): the speed is the scenario's plus the episode's base
+    offset (from the start) plus the manoeuvre's change."""
     if sc.manoeuvres:
         tau = max(0.0, t - manoeuvre[0])
         dpsi, dh, dv = manoeuvre[1], manoeuvre[2], manoeuvre[3]
         psi = math.copysign(min(abs(dpsi), TURN_RATE_RAD_S * tau), dpsi)
         climb = math.copysign(CLIMB_RATE_MPS, dh) if 0.0 < tau < abs(dh) / CLIMB_RATE_MPS else 0.0
-        speed = sc.airspeed_mps + math.copysign(min(abs(dv), ACCEL_MPS2 * tau), dv)
+        speed = sc.airspeed_mps + manoeuvre[4] + math.copysign(min(abs(dv), ACCEL_MPS2 * tau), dv)
         for i in range(3):
             out_pos[i] = ref_pos[i]
         out_vel[0] = speed * math.cos(psi)

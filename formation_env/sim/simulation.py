@@ -31,7 +31,7 @@ from ..aircraft.state import POS
 from ..atmosphere.frozen_field import frozen_field_reset
 from ..atmosphere.spectral_field import spectral_field_reset
 from ..control import PIDFlightControl
-from ..control.law import fcs_params
+from ..control.law import fcs_params, settled_controller
 from ..control.observation import ned_to_track_frame, track_frame_offset_to_ned
 from ..scenarios import AEROSONDE_SPAN_M, Scenario, get_scenario
 from ..wake import WakeModel
@@ -52,6 +52,21 @@ __all__ = ["Simulation", "SimOutput", "InfoArrays", "RESET_OPTIONS", "INFO_REWAR
 
 #: the options :meth:`Simulation.reset` takes (an unknown one is a ``TypeError``)
 RESET_OPTIONS = ("steady_wind_ned",)
+
+
+def _trim_cached(airspeed_mps: float, altitude_m: float, fuel_kg: float):
+    """:func:`~formation_env.aircraft.trim` at (airspeed, altitude, fuel), course north (the last few kept: a
+    batch of resets at the trim's fuel trims the followers once)."""
+    key = (float(airspeed_mps), float(altitude_m), float(fuel_kg))
+    hit = _TRIMS.get(key)
+    if hit is None:
+        if len(_TRIMS) > 64:
+            _TRIMS.clear()
+        hit = _TRIMS[key] = trim(*key)
+    return hit
+
+
+_TRIMS: dict = {}
 
 
 class SimOutput(NamedTuple):
@@ -200,7 +215,7 @@ class Simulation:
                 s.steady_wind[i, 1] += rng.uniform(-rnd.crosswind_mps, rnd.crosswind_mps)
             s.manoeuvre[i] = 0.0
             if rnd.any_manoeuvre:
-                s.manoeuvre[i] = [rng.uniform(0.0, 0.5 * self.duration_s),
+                s.manoeuvre[i, :4] = [rng.uniform(0.0, 0.5 * self.duration_s),
                                   math.radians(rng.uniform(-rnd.leader_turn_deg, rnd.leader_turn_deg)),
                                   rng.uniform(-rnd.leader_climb_m, rnd.leader_climb_m),
                                   rng.uniform(-rnd.leader_speed_mps, rnd.leader_speed_mps)]
@@ -212,12 +227,14 @@ class Simulation:
                                     if rnd.turbulence_sigma_spread > 0 else 1.0)
             s.controller[i] = 0.0
             s.controller[i, :, 6] = state[:, 5]  # the washout filter starts settled on the yaw rate
+            s.command[i] = self.trim.controls[0, :4]
+            if rnd.random_leader:  # drawn last: the episode's other draws are the seed's without them
+                self._random_leader(i, rng, state)
             s.step[i] = 0
             s.induced_wind_ned[i] = 0.0
             s.induced_omega_body[i] = 0.0
             s.circulation[i] = 0.0
             s.status[i] = 0
-            s.command[i] = self.trim.controls[0, :4]
             s.previous_action[i] = 0.0
             s.episode_return[i] = 0.0
             s.episode_decisions[i] = 0
@@ -251,6 +268,29 @@ class Simulation:
         o.box_depth_m[idx] = 0.0
         self._reset_once[idx] = True
         return self._result()
+
+    def _random_leader(self, i: int, rng, state: np.ndarray) -> None:
+        """Formation i's leader weight and speed (``Randomisation.leader_speed_offset_*_mps``, ``leader_fuel_offset_*_kg``):
+        draws the base speed offset, then the leader's fuel (each only when on); the leader starts trimmed for its
+        fuel at that speed, the followers at it with the trim's fuel, each with its controller settled on its trim
+        (:func:`~formation_env.control.law.settled_controller`). ``state`` (V, 16): the start state, positions kept."""
+        rnd, sc, s = self.config.randomisation, self.scenario, self.state
+        dv = rng.uniform(rnd.leader_speed_offset_min_mps, rnd.leader_speed_offset_max_mps) if rnd.random_speed else 0.0
+        f0 = self.trim.fuel
+        fuel = rng.uniform(f0 + rnd.leader_fuel_offset_min_kg, f0 + rnd.leader_fuel_offset_max_kg) if rnd.random_fuel \
+            else f0
+        s.manoeuvre[i, 4] = dv
+        speed = sc.airspeed_mps + dv
+        trims = [_trim_cached(speed, sc.altitude_m, fuel)] + [_trim_cached(speed, sc.altitude_m, self.trim.fuel)] * \
+            (self.n_vehicles - 1)
+        for k, tr in enumerate(trims):
+            pos = state[k, POS].copy()
+            state[k] = tr.state[0]
+            state[k, POS] = pos
+            s.command[i, k] = tr.controls[0, :4]
+            s.controller[i, k] = settled_controller(self.params.fcs, tr.controls[0, :4], tr.theta, tr.phi,
+                                                    tr.state[0, 5])
+        s.aircraft[i] = state
 
     def _reset_options(self, options, n: int):
         if options is None:

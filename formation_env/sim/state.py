@@ -33,7 +33,8 @@ class SimState(NamedTuple):
     velocity_demand: np.ndarray  # (B, V, 3) demanded velocities, m/s NED
     slot_jitter: np.ndarray  # (B, V, 3) per-episode slot offset jitter, m, track frame
     steady_wind: np.ndarray  # (B, 3) per-episode steady wind, m/s NED
-    manoeuvre: np.ndarray  # (B, 4) leader manoeuvre: start s, heading change rad, altitude change m, speed change m/s
+    manoeuvre: np.ndarray  # (B, 5) leader manoeuvre: start s, heading change rad, altitude change m, speed change m/s,
+    #                        and the episode's base speed offset m/s (flown from the start)
     reference_position: np.ndarray  # (B, 3) integrated manoeuvring reference path position, m NED
     gust_ned: np.ndarray  # (B, V, 3) turbulence at each UAV now, m/s NED
     gust_omega_body: np.ndarray  # (B, V, 3) rotational gusts at each UAV now (p_g, -q_g, -r_g), rad/s body
@@ -72,7 +73,7 @@ def init_state(batch_size: int, n_vehicles: int, n_panels: int, field_params) ->
         aircraft=np.zeros((b, v, N_STATES)), controller=np.zeros((b, v, N_CSTATE)), command=np.zeros((b, v, 4)),
         step=np.zeros(b, dtype=np.int64), induced_wind_ned=z3(), induced_omega_body=z3(),
         circulation=np.zeros((b, max(n_panels, 1))), position_demand=z3(), velocity_demand=z3(), slot_jitter=z3(),
-        steady_wind=np.zeros((b, 3)), manoeuvre=np.zeros((b, 4)), reference_position=np.zeros((b, 3)), gust_ned=z3(),
+        steady_wind=np.zeros((b, 3)), manoeuvre=np.zeros((b, 5)), reference_position=np.zeros((b, 3)), gust_ned=z3(),
         gust_omega_body=z3(), field=frozen_field_init(field_params.lanes, b, v),
         modes=spectral_field_init(field_params.modes, b), status=np.zeros((b, v), dtype=np.int64),
         previous_action=np.zeros((b, v, 4)), previous_error=np.zeros((b, v)), episode_return=np.zeros((b, v)),

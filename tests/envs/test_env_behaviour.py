@@ -175,7 +175,7 @@ def test_leader_manoeuvre_turns_climbs_and_changes_speed_as_drawn():
                                                                  leader_speed_mps=2.0))
     env.reset(seed=7)
     eng = env.sim
-    t0, dpsi, dh, dv = eng.state.manoeuvre[0]
+    t0, dpsi, dh, dv = eng.state.manoeuvre[0, :4]  # [4]: the base speed offset (0 here)
     assert 0.0 <= t0 <= 20.0 and abs(dpsi) > 0 and abs(dh) > 0 and abs(dv) > 0
     while env.agents:
         env.step({a: np.zeros(4, np.float32) for a in env.agents})

@@ -79,3 +79,24 @@ def test_command_line_errors_exit_2_with_one_line(tmp_path, capsys):
         assert main(argv) == 2
         err = capsys.readouterr().err.strip()
         assert len(err.splitlines()) == 1 and needle in err and "Traceback" not in err
+
+
+def test_the_randomised_leader_variant_flies_with_its_own_reference():
+    """The variant's episodes draw the leader's weight and speed, and each is judged against the optimum scaled by
+    the leader's factor (formation_env.tasks.wake_surfing.optimum.leader_factor); a task without a wake-surfing box
+    is refused."""
+    from train.evaluation.wake_surfing_eval import evaluate_wake_surfing
+
+    cfg = dataclasses.replace(eval_env_config("wake_surfing_random_leader", "setpoints"), duration_s=10.0)
+    assert cfg.randomisation.random_leader and cfg.compute_benefit
+    eps = fly(pid_surfer(), [1000, 1001, 1002], config=cfg)
+    for e in eps:
+        assert 9.0 <= e["leader_mass_kg"] <= 13.5 and 21.0 < e["leader_airspeed_mps"] < 28.0
+        assert 0.8 < e["reference_factor"] < 1.4 and e["reference_factor"] != 1.0
+        assert 0.364 * e["reference_factor"] < e["reference_saving"] < 0.370 * e["reference_factor"]
+    assert len({round(e["leader_mass_kg"], 9) for e in eps}) == 3
+    base = fly(pid_surfer(), [1000], config=dataclasses.replace(eval_env_config("wake_surfing", "setpoints"),
+                                                                duration_s=10.0))[0]
+    assert base["reference_factor"] == 1.0 and base["leader_mass_kg"] == pytest.approx(10.5)
+    with pytest.raises(ValueError, match="scenario must be one of"):
+        evaluate_wake_surfing([], scenario="close_formation", episodes=1)

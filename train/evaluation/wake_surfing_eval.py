@@ -17,6 +17,8 @@ stratified bootstrap intervals and the probability of improvement of the policie
 ``results.json``, ``results.md``, ``marl_eval.json`` and ``performance_profile.png`` (with several seeds) and,
 with ``--figure PATH``, the saving map with the trajectories.
 ``--tune-es`` runs the extremum seeker's gain sweep on training seeds instead (docs/wake_surfing.md).
+``--scenario wake_surfing_random_leader`` evaluates on the randomised-leader variant (the leader's weight and speed
+drawn per episode; each episode's reference follows them).
 """
 
 from __future__ import annotations
@@ -41,6 +43,7 @@ from .wake_surfing_rollout import es_surfer, fly, oracle_surfer, pid_formation_s
 __all__ = ["evaluate_wake_surfing", "summarise_surfer", "paired_gain", "tune_es", "plot_surfing_figure", "main"]
 
 BASELINE_NAMES = ("pid", "pid_formation", "extremum_seeking")
+SCENARIOS = ("wake_surfing", "wake_surfing_random_leader")  # the task and its randomised-leader variant
 TUNING_SEEDS = tuple(range(1000, 1016))  # training-range seeds (never the held-out ones) for the ES sweep
 ES_GRID = {"gain_y": [0.25, 0.5, 1.0], "gain_z": [0.1, 0.25, 0.5], "amplitude_y_m": [0.2, 0.35], "amplitude_z_m": [0.12],
            "margin_m": [0.15], "kp_z": [3.0], "ki_z": [0.5]}
@@ -49,6 +52,11 @@ ES_GRID = {"gain_y": [0.25, 0.5, 1.0], "gain_z": [0.1, 0.25, 0.5], "amplitude_y_
 def _censored_times(eps: list[dict]) -> np.ndarray:
     """Time to 80 % per episode, an episode that never reaches it counted as its length."""
     return np.array([e["time_to_80_s"] if math.isfinite(e["time_to_80_s"]) else e["duration_s"] for e in eps])
+
+
+def _mean_of(eps: list[dict], key: str) -> float:
+    """Mean of ``key`` over the episodes (NaN where an episode record has none, e.g. one made before it existed)."""
+    return float(np.mean([float(e.get(key, float("nan"))) for e in eps]))
 
 
 def summarise_surfer(eps: list[dict], *, n_boot: int = N_BOOT, seed: int = 0) -> dict:
@@ -74,6 +82,9 @@ def summarise_surfer(eps: list[dict], *, n_boot: int = N_BOOT, seed: int = 0) ->
         "box_outside_longest_s_worst": float(longest.max()),
         "box_outside_frac": float(col("box_outside_frac").mean()),
         "min_separation_m": float(col("min_separation_m").min()),
+        # the energy account (formation_env.sim.energy): the follower's total-drag saving, % of its drag alone
+        "drag_saving_pct_ell": _mean_of(eps, "drag_saving_pct_ell"),
+        "drag_saving_pct_6dof": _mean_of(eps, "drag_saving_pct_6dof"),
     }
 
 
@@ -120,14 +131,17 @@ def surfing_comparisons(episodes_by: dict[str, list[dict]], names: list[str], *,
 
 
 def evaluate_wake_surfing(policies, *, episodes: int = 100, seeds=None, es_gains=None, n_boot: int = N_BOOT,
-                          turbulence_sigma_mps: float | None = None, oracle_margins_b=(), log=print) -> dict:
+                          turbulence_sigma_mps: float | None = None, oracle_margins_b=(), log=print,
+                          scenario: str = "wake_surfing") -> dict:
     """Every policy (SB3 zips) and the three baselines on the same held-out episodes; the report.
-    ``turbulence_sigma_mps`` replaces the task's Dryden level (None: the task's); ``oracle_margins_b``
+    ``turbulence_sigma_mps`` replaces the task's turbulence level (None: the task's); ``oracle_margins_b``
     adds the oracle set-point ceilings (:func:`train.evaluation.wake_surfing_rollout.oracle_surfer`), reported
-    beside the controllers but compared with none."""
+    beside the controllers but compared with none. ``scenario``: one of :data:`SCENARIOS` (the task's preset)."""
     from .episodes import eval_env_config
 
-    config = eval_env_config("wake_surfing", "setpoints", turbulence_sigma_mps=turbulence_sigma_mps)
+    if scenario not in SCENARIOS:
+        raise ValueError(f"scenario must be one of {SCENARIOS}, got {scenario!r}")
+    config = eval_env_config(scenario, "setpoints", turbulence_sigma_mps=turbulence_sigma_mps)
     seeds = list(seeds) if seeds is not None else [TEST_SEED_BASE + i for i in range(episodes)]
     surfers = [pid_surfer(), pid_formation_surfer(), es_surfer(es_gains)]
     names = []
@@ -147,7 +161,7 @@ def evaluate_wake_surfing(policies, *, episodes: int = 100, seeds=None, es_gains
             f"[{summ['saving_ratio_ci'][0]:.3f}, {summ['saving_ratio_ci'][1]:.3f}], reached 80 % in "
             f"{summ['reached_80_frac']:.2f} of episodes, >1 s outside the box {summ['box_outside_over_1s']}, "
             f"collisions {summ['collisions']} ({time.perf_counter() - t0:.0f} s)")
-    report = {"seeds": seeds, "turbulence_sigma_mps": config.randomisation.turbulence_sigma_mps,
+    report = {"scenario": scenario, "seeds": seeds, "turbulence_sigma_mps": config.randomisation.turbulence_sigma_mps,
               "randomisation": dataclasses.asdict(config.randomisation), "controllers": {n: {"summary": summarise_surfer(e, n_boot=n_boot), "episodes": e}
                                               for n, e in episodes_by.items()}}
     comps = surfing_comparisons(episodes_by, names, n_boot=n_boot)
@@ -316,7 +330,9 @@ def _main(argv=None) -> int:
     p.add_argument("--figure", help="write the saving-map figure here (needs a policy)")
     p.add_argument("--overwrite", action="store_true")
     p.add_argument("--tune-es", action="store_true", help="run the extremum seeker's gain sweep on training seeds")
-    p.add_argument("--turbulence", type=float, default=None, help="Dryden sigma, m/s (default: the task's 0.25)")
+    p.add_argument("--turbulence", type=float, default=None, help="turbulence sigma, m/s (default: the task's 0.25)")
+    p.add_argument("--scenario", default="wake_surfing", choices=SCENARIOS,
+                   help="the task (default) or its randomised-leader variant (leader weight and speed drawn per episode)")
     p.add_argument("--oracle-margins", type=float, nargs="*", default=[0.05, 0.1],
                    help="oracle set-point ceilings to add, spans below the reference optimum")
     a = p.parse_args(argv)
@@ -340,7 +356,7 @@ def _main(argv=None) -> int:
 
         out = prepare_output_dir(a.out, overwrite=a.overwrite)
     report = evaluate_wake_surfing(a.policies, episodes=a.episodes, turbulence_sigma_mps=a.turbulence,
-                                   oracle_margins_b=a.oracle_margins)
+                                   oracle_margins_b=a.oracle_margins, scenario=a.scenario)
     if out is not None:
         from formation_env.io import atomic_write_json, atomic_write_text
 
@@ -348,8 +364,13 @@ def _main(argv=None) -> int:
         r = report["randomisation"]
         head = (f"# Wake surfing: held-out evaluation\n\n{len(report['seeds'])} episodes (seeds {report['seeds'][0]}.."
                 f"{report['seeds'][-1]}, never used in training or model selection): crosswind +-{r['crosswind_mps']:g} m/s, "
-                f"leader turn +-{r['leader_turn_deg']:g} deg and speed change +-{r['leader_speed_mps']:g} m/s, frozen Dryden "
-                f"sigma {r['turbulence_sigma_mps']:g} m/s, wake on. Saving counted as 0 outside the safe box; ratio = per-episode "
+                f"leader turn +-{r['leader_turn_deg']:g} deg and speed change +-{r['leader_speed_mps']:g} m/s"
+                + (f", leader speed 25 {r['leader_speed_offset_min_mps']:+g}..{r['leader_speed_offset_max_mps']:+g} m/s and "
+                   f"fuel 2 {r['leader_fuel_offset_min_kg']:+g}..{r['leader_fuel_offset_max_kg']:+g} kg drawn per episode"
+                   if any(r.get(k) for k in ("leader_fuel_offset_min_kg", "leader_fuel_offset_max_kg",
+                                             "leader_speed_offset_min_mps", "leader_speed_offset_max_mps"))
+                   else "")
+                + f", frozen turbulence field sigma {r['turbulence_sigma_mps']:g} m/s, wake on. Saving counted as 0 outside the safe box; ratio = per-episode "
                 "saving / reference optimum's; intervals 95 % percentile bootstrap over episodes (10,000 resamples, "
                 "seed 0), Wilson for rates. Oracle rows know the wind (a ceiling, not a controller).\n\n")
         atomic_write_text(out / "results.md", head + report["markdown"], overwrite=a.overwrite)

@@ -51,6 +51,7 @@ __all__ = ["DEFAULT_X_B", "THESIS_SLOT_B", "DEFAULT_Z_EXCLUSION_B", "CACHE_PATH"
            "build_cache", "write_cache", "load_cache", "optimum_saving"]
 
 DEFAULT_X_B = -2.0
+NOMINAL_FUEL_KG = 2.0  # the trim's fuel (formation_env.aircraft.trim), kg: 10.5 kg in all
 THESIS_SLOT_B = (-2.0, 1.0, 0.3)  # section 6.5's formation-keeping slot
 DEFAULT_Z_EXCLUSION_B = 0.10  # chosen from the map: exclusion_band() at x = -2 b (see the cache)
 RIPPLE_Y_B = np.round(np.arange(0.0, 1.5 + 1e-9, 0.005), 6)  # lateral profile the ripple is measured on
@@ -60,23 +61,37 @@ _FD_STEP_B = 1e-6  # finite-difference step of the optimiser's gradient, spans
 
 
 @lru_cache(maxsize=8)
-def _setup(wake: WakeConfig, airspeed_mps: float, altitude_m: float):
-    """The simulator's two-ship ELL model and wing origin, and the trim state (built once)."""
-    from ...aircraft import trim
+def _model(wake: WakeConfig):
     from ...sim.formation import wake_model_for, wing_origin_body
 
     if not wake.enabled:
         raise ValueError("close_formation_map: the wake must be enabled")
-    return wake_model_for(wake, 2), wing_origin_body(), trim(airspeed_mps, altitude_m)
+    return wake_model_for(wake, 2), wing_origin_body()
+
+
+@lru_cache(maxsize=512)
+def _trim(airspeed_mps: float, altitude_m: float, fuel_kg: float):
+    from ...aircraft import trim
+
+    return trim(airspeed_mps, altitude_m, fuel_kg)
+
+
+def _setup(wake: WakeConfig, airspeed_mps: float, altitude_m: float, leader_fuel_kg: float = NOMINAL_FUEL_KG,
+           follower_fuel_kg: float = NOMINAL_FUEL_KG):
+    """The simulator's two-ship ELL model and wing origin (built once), and the two trims (each kept)."""
+    model, origin = _model(wake)
+    return model, origin, _trim(airspeed_mps, altitude_m, leader_fuel_kg), _trim(airspeed_mps, altitude_m, follower_fuel_kg)
 
 
 def slot_savings(offsets_b, *, wake: WakeConfig = TASK_WAKE, airspeed_mps: float = 25.0,
-                 altitude_m: float = 1000.0, span_m: float = AEROSONDE_SPAN_M, chunk: int = 2048) -> np.ndarray:
+                 altitude_m: float = 1000.0, span_m: float = AEROSONDE_SPAN_M, chunk: int = 2048,
+                 leader_fuel_kg: float = NOMINAL_FUEL_KG, follower_fuel_kg: float = NOMINAL_FUEL_KG) -> np.ndarray:
     """Induced-drag saving of (leader, follower) with the follower at ``offsets_b``.
 
     offsets_b (..., 3): follower slot relative to the leader in its track frame, spans. Returns
     (..., 2): ``[..., 0]`` the leader's saving, ``[..., 1]`` the follower's. All slots are batched
-    ELL evaluations (``chunk`` at a time).
+    ELL evaluations (``chunk`` at a time). Each aircraft flies its own trim at ``airspeed_mps`` with its fuel
+    (``leader_fuel_kg``, ``follower_fuel_kg``: its weight, AeroSim mass = 8.5 kg + fuel; default the trim's 2 kg).
     """
     off = np.asarray(offsets_b, dtype=float)
     if off.ndim < 1 or off.shape[-1] != 3 or not np.all(np.isfinite(off)):
@@ -84,12 +99,14 @@ def slot_savings(offsets_b, *, wake: WakeConfig = TASK_WAKE, airspeed_mps: float
     from ...sim.formation import ell_state_from_aircraft
     from ...wake import formation_benefit
 
-    model, wing_origin, tr = _setup(wake, float(airspeed_mps), float(altitude_m))
+    model, wing_origin, tr_l, tr_f = _setup(wake, float(airspeed_mps), float(altitude_m), float(leader_fuel_kg),
+                                            float(follower_fuel_kg))
+    pair = np.concatenate([tr_l.state, tr_f.state])  # (2, 16)
     flat = off.reshape(-1, 3)
     out = np.empty((flat.shape[0], 2))
     for i in range(0, flat.shape[0], chunk):
         part = flat[i:i + chunk]
-        state = np.repeat(tr.state[None], part.shape[0], axis=0).repeat(2, axis=1)  # (P, 2, 16)
+        state = np.repeat(pair[None], part.shape[0], axis=0)  # (P, 2, 16)
         state[:, 1, 10:13] += part * span_m
         ell = ell_state_from_aircraft(state, np.zeros((part.shape[0], 2, 3)), wing_origin)
         out[i:i + chunk] = formation_benefit(model, ell)["induced_drag_saving"]
@@ -285,7 +302,7 @@ def build_cache(x_b: float = DEFAULT_X_B, *, y_b=None, z_b=None, wake: WakeConfi
     slot = tuple(round(v, slot_decimals) for v in opt.offset_b)
     thesis = slot_savings(np.array(THESIS_SLOT_B), **kw)
     slot_s = slot_savings(np.array(slot), **kw)
-    _, wing_origin, tr = _setup(wake, float(airspeed_mps), float(altitude_m))
+    _, wing_origin, tr, _ = _setup(wake, float(airspeed_mps), float(altitude_m))
     return {
         "_about": "Close-formation induced-drag map (formation_env.tasks.close_formation.optimum). Offsets "
                   "in spans b of the follower from the leader, leader's track frame (x forward, y starboard, "

@@ -24,11 +24,14 @@ band where the saving is the discrete sheet's artefact.
 
 from __future__ import annotations
 
+import dataclasses
+
 from ...scenarios import Scenario, SlotSchedule
 from ...sim.config import Randomisation, RewardWeights
 from ..base import Task, register_task
 
-__all__ = ["SCENARIO", "TASK", "WAKE_SURFING_REWARD", "WAKE_SURFING_RANDOMISATION", "BASELINES"]
+__all__ = ["SCENARIO", "TASK", "WAKE_SURFING_REWARD", "WAKE_SURFING_RANDOMISATION", "BASELINES",
+           "RANDOM_LEADER_SCENARIO", "RANDOM_LEADER_TASK", "RANDOM_LEADER_RANDOMISATION"]
 
 # The follower starts in the thesis slot and may move its set-point anywhere in a safe box (0-2 spans
 # starboard; vertically from 0.8 span below the leader up to 0.1 span below it, not into the band |z| < 0.1 b
@@ -65,3 +68,26 @@ TASK = register_task(Task(
     baselines=BASELINES, reference="formation_env.tasks.wake_surfing.optimum",
     metrics="formation_env.tasks.wake_surfing.metrics",
     description="move within the safe box to the position of least induced drag"))
+
+
+# The randomised-leader variant (issue 24): the same scenario, preset and box, and each episode also draws the
+# leader's weight (initial fuel 0.5-5 kg: 9.0-13.5 kg, AeroSim's 8.5 kg empty and 13.5 kg gross) and its speed
+# (23-26 m/s from the start, plus the manoeuvre's +-1 m/s: 22-27 m/s, where the Aerosonde holds every fuel load with
+# elevator and throttle to spare: 28 m/s needs full throttle, 21 m/s with 5 kg -23 deg of the 25 deg elevator). The
+# crab angle, hence the optimum's position, follows the crosswind over the airspeed, and the saving there grows with
+# the leader's weight (docs/wake_surfing.md, "The randomised-leader variant"): the saving to be had cannot be read off
+# the measured wind alone. The draws come after all of wake_surfing's, so episode k
+# of the variant has wake_surfing's episode k wind, manoeuvre and turbulence (paired).
+RANDOM_LEADER_SCENARIO = dataclasses.replace(
+    SCENARIO, name="wake_surfing_random_leader",
+    description=SCENARIO.description + "; the leader's weight (9.0-13.5 kg) and speed (23-26 m/s) drawn per episode")
+RANDOM_LEADER_RANDOMISATION = dataclasses.replace(WAKE_SURFING_RANDOMISATION, leader_speed_offset_min_mps=-2.0,
+                                                  leader_speed_offset_max_mps=1.0, leader_fuel_offset_min_kg=-1.5,
+                                                  leader_fuel_offset_max_kg=3.0)
+
+RANDOM_LEADER_TASK = register_task(Task(
+    "wake_surfing_random_leader", RANDOM_LEADER_SCENARIO, "formation_env/WakeSurfingRandomLeader-v0", 1,
+    options={**TASK.options, "randomisation": RANDOM_LEADER_RANDOMISATION},
+    baselines=BASELINES, reference="formation_env.tasks.wake_surfing.optimum",
+    metrics="formation_env.tasks.wake_surfing.metrics",
+    description="wake surfing behind a leader whose weight and speed are drawn per episode: find the wake"))

@@ -8,7 +8,12 @@ saving                     mean induced-drag saving over the episode (1 - D_i fo
                            a decision outside the safe box counted as 0 (there the saving may be the
                            ELL's wake-plane artefact); ``saving_measured``: every decision as measured
 reference_saving           mean over the episode of the reference optimum's saving at each instant's
-                           crab angle (:func:`.optimum.episode_reference`)
+                           crab angle (:func:`.optimum.episode_reference`: from the steady wind, the leader's
+                           demanded track and its air speed |v_demand - wind|); with the leader's weight and
+                           speed drawn (the randomised-leader variant), times :func:`.optimum.leader_factor` at
+                           the episode's mean crab and air speed and the two aircraft's fuel at the start
+leader_mass_kg             the leader's mass at the start; ``leader_airspeed_mps``: its demanded air speed,
+                           mean over the episode
 saving_ratio               saving / reference_saving
 time_to_80_s               first time the saving (counted as above), averaged over the last second,
                            reaches 80 % of the reference (NaN: never)
@@ -31,6 +36,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from ...aircraft import AEROSONDE
+from ...aircraft.mass import mass_properties
 from ...frames import ned_to_track_frame
 from ...rollout import Recorder, RolloutResult
 from ...scenarios import AEROSONDE_SPAN_M
@@ -56,6 +63,10 @@ class WakeSurfingRecorder(Recorder):
     def start(self, sim, out) -> None:
         self.rec = {k: [] for k in ("saving", "box", "sep", "rel", "chi", "speed", "ell", "sixdof")}
         self.wind = sim.state.steady_wind.copy()  # each episode's steady wind (the reference follows it)
+        # the leader's and the follower's fuel at the start (a drawn leader weight scales the saving: optimum.leader_factor)
+        self.fuel = sim.state.aircraft[:, :2, 13].copy()
+        self.mass = mass_properties(self.fuel, AEROSONDE)[0]
+        self.random_leader = sim.config.randomisation.random_leader
         self.hz = sim.config.control_hz
         self.full_decisions = -(-sim.n_steps // sim.substeps)  # an episode flown to the end
 
@@ -70,7 +81,7 @@ class WakeSurfingRecorder(Recorder):
         rec["sep"].append(np.where(alive, sim.output.separation_m[:, 1], np.nan))
         rec["rel"].append(np.where(alive[:, None], rel, np.nan))
         rec["chi"].append(chi)
-        rec["speed"].append(np.linalg.norm(vd0, axis=1))
+        rec["speed"].append(np.linalg.norm(vd0 - self.wind, axis=1))  # the demanded air speed
         acc = info.energy_account[:, 1]  # the follower's energy account (zeros without wake)
         rec["ell"].append(np.where(alive, acc[:, ENERGY_COLUMNS.index("drag_saving_pct_ell")], np.nan))
         rec["sixdof"].append(np.where(alive, acc[:, ENERGY_COLUMNS.index("drag_saving_pct_6dof")], np.nan))
@@ -94,7 +105,9 @@ def episode_metrics(rec: WakeSurfingRecorder, result: RolloutResult, keep_series
         # outside the box a decision earns nothing: there the ELL's saving may be the wake-plane band's
         # artefact (up to ~0.8), which no controller may claim
         sv_in = np.where(outside, 0.0, np.concatenate([sv, np.zeros(missing)]))
-        ref = episode_reference(wind[i], arr["chi"][:n, i], arr["speed"][:n, i])
+        fuel = dict(leader_fuel_kg=float(rec.fuel[i, 0]), follower_fuel_kg=float(rec.fuel[i, 1])) \
+            if rec.random_leader else {}
+        ref = episode_reference(wind[i], arr["chi"][:n, i], arr["speed"][:n, i], **fuel)
         ref_saving = float(ref["mean_saving"])
         smooth = np.convolve(sv_in[:n], np.ones(window) / window, mode="full")[:n]
         smooth[:window - 1] = -np.inf  # a full second first
@@ -115,6 +128,9 @@ def episode_metrics(rec: WakeSurfingRecorder, result: RolloutResult, keep_series
             "collision": bool(result.collided[i]),
             "crashed": bool(result.crashed[i]),
             "crosswind_mps": float(wind[i, 1]),
+            "leader_mass_kg": float(rec.mass[i, 0]),
+            "leader_airspeed_mps": float(np.mean(arr["speed"][:n, i])),
+            "reference_factor": float(ref["factor"]),
         }
         if keep_series:
             m["series"] = {"lateral_b": arr["rel"][:n, i, 1].tolist(), "vertical_b": arr["rel"][:n, i, 2].tolist(),

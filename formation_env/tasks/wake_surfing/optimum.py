@@ -57,11 +57,11 @@ import numpy as np
 
 from ...io import atomic_write_json
 from ...scenarios.definitions import AEROSONDE_SPAN_M, get_scenario
-from ..close_formation.optimum import DEFAULT_Z_EXCLUSION_B, slot_savings
+from ..close_formation.optimum import DEFAULT_Z_EXCLUSION_B, NOMINAL_FUEL_KG, slot_savings
 
 __all__ = ["SAFE_BOX_B", "X_B", "CRAB_MAX_DEG", "CACHE_PATH", "crab_angle_rad", "rotate_track_to_heading",
            "saving_in_crosswind", "optimum_in_box", "build_cache", "write_cache", "load_cache",
-           "reference_optimum", "episode_reference", "optimum_saving", "main"]
+           "reference_optimum", "episode_reference", "optimum_saving", "leader_factor", "main"]
 
 SAFE_BOX_B = get_scenario("wake_surfing").safe_box_b  # ((x_lo, x_hi), (y_lo, y_hi), (z_lo, z_hi)) spans
 X_B = -2.0  # the follower's along-track set-point, spans
@@ -253,18 +253,48 @@ def reference_optimum(crab_rad, *, cache: dict | None = None):
     return tuple(np.interp(d, grid, np.asarray(o[k], float)) for k in ("y_b", "z_b", "saving"))
 
 
-def episode_reference(wind_ned, track_rad, airspeed_mps, *, cache: dict | None = None) -> dict:
+def leader_factor(crab_rad: float, airspeed_mps: float, leader_fuel_kg: float,
+                  follower_fuel_kg: float = NOMINAL_FUEL_KG) -> float:
+    """The follower's saving at the reference optimum of crab angle ``crab_rad`` with the pair trimmed at
+    ``airspeed_mps`` (m/s) and the leader carrying ``leader_fuel_kg``, the follower ``follower_fuel_kg`` of fuel (kg;
+    AeroSim mass = 8.5 kg + fuel), over the same with the cache's pair (25 m/s, the trim's 2 kg each): the factor on
+    the cached saving for a leader of another weight and speed.
+
+    Why a factor at the cached position: the leader's weight scales its circulation (its lift is its weight), hence
+    the upwash it leaves, without moving it; the optimum stays where it was (measured: 0.002 b at 9.0 and 13.5 kg)
+    and the saving there, stationary in the position, is the optimum's to 3e-5. The factor is not the weight ratio:
+    the follower's induced drag in formation has a term in the square of the leader's circulation (its own loads
+    respond to the upwash), so a 13.5 kg leader gives 1.342 x the saving of a 10.5 kg one, not 1.286 x, a 9.0 kg one
+    0.836 x, not 0.857 x (ELL at 25 m/s, crab 0). The airspeed enters through the trims' attitudes (~1e-3 over
+    22-28 m/s). Two ELL evaluations (plus the two trims the first time)."""
+    c = float(crab_rad)
+    y, z, _ = reference_optimum(c)
+    o = np.array([X_B, float(y), float(z)])
+    num = saving_in_crosswind(o, c, airspeed_mps=float(airspeed_mps), leader_fuel_kg=float(leader_fuel_kg),
+                              follower_fuel_kg=float(follower_fuel_kg))
+    den = saving_in_crosswind(o, c)
+    return float(num / den)
+
+
+def episode_reference(wind_ned, track_rad, airspeed_mps, *, leader_fuel_kg: float | None = None,
+                      follower_fuel_kg: float = NOMINAL_FUEL_KG, cache: dict | None = None) -> dict:
     """The reference optimum along an episode.
 
     wind_ned (3,) (or (T, 3)): the steady wind, NED, m/s; track_rad (T,): the leader's demanded
     ground track, rad from north; airspeed_mps (T,): its airspeed, m/s. Returns ``crab_rad``, ``y_b``,
     ``z_b``, ``saving`` (T,) (each instant's crab angle and the optimum under it, spans, track frame)
-    and ``mean_saving`` (their mean over the samples)."""
+    and ``mean_saving`` (their mean over the samples). With ``leader_fuel_kg`` (a leader of drawn weight
+    and speed, the randomised-leader variant) the savings are multiplied by :func:`leader_factor` at the
+    episode's mean crab angle and mean airspeed (None: the cache's pair, factor 1); ``factor`` says which."""
     chi = np.atleast_1d(np.asarray(track_rad, float))
     va = np.broadcast_to(np.asarray(airspeed_mps, float), chi.shape)
     c = crab_angle_rad(np.asarray(wind_ned, float), chi, va)
     y, z, s = reference_optimum(c, cache=cache)
-    return {"crab_rad": c, "y_b": y, "z_b": z, "saving": s, "mean_saving": float(np.mean(s))}
+    k = 1.0
+    if leader_fuel_kg is not None:
+        k = leader_factor(float(np.mean(c)), float(np.mean(va)), leader_fuel_kg, follower_fuel_kg)
+        s = s * k
+    return {"crab_rad": c, "y_b": y, "z_b": z, "saving": s, "mean_saving": float(np.mean(s)), "factor": k}
 
 
 def optimum_saving(cache: dict | None = None) -> float:
