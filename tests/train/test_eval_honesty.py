@@ -37,3 +37,28 @@ def test_a_crash_earns_no_saving_for_the_time_it_did_not_fly():
     ep = fly(FunctionPolicy(_crash), [7], config=cfg)[0]
     assert ep["crashed"] and ep["duration_s"] < 2.0
     assert ep["box_outside_frac"] > 0.9 and ep["saving"] < 0.02 and ep["saving_ratio"] < 0.05
+
+
+def test_the_safe_box_saving_counts_no_decision_outside_the_box_as_the_task_metric_does():
+    """Model selection in a safe-box task (issue 24) ranks by ``induced_drag_saving_in_box``: each decision's
+    saving, none outside the box and none for the time not flown. It is the wake-surfing metric's ``saving``
+    (:mod:`formation_env.tasks.wake_surfing.metrics`), episode by episode, and not the saving as measured
+    whenever the follower left the box (outside, the ELL's saving may be an artefact, or negative)."""
+    import pytest
+
+    from train.evaluation.summary import selection_score
+    from train.evaluation.wake_surfing_rollout import fly
+
+    cfg = eval_env_config("wake_surfing", "setpoints", turbulence_sigma_mps=1.0, duration_s=30.0)
+    seeds = [5, 6, 7]
+    eps = run_episodes(ZeroPolicy(), cfg, seeds)
+    task = fly(ZeroPolicy(), seeds, config=cfg)
+    assert any(e["box_outside_frac"] > 0.05 for e in eps)  # the thesis PID leaves the box at sigma 1
+    for e, t in zip(eps, task):
+        assert e["induced_drag_saving_in_box"] == pytest.approx(t["saving"], abs=1e-12)
+        if e["box_outside_frac"] > 0:
+            assert abs(e["induced_drag_saving_in_box"] - e["induced_drag_saving"]) > 1e-4
+    s = summarise(eps, n_boot=50)
+    clean = {**s, "collisions": 0, "crashes": 0}  # (the PID may collide at sigma 1: that disqualifies)
+    assert selection_score(clean) == pytest.approx(-s["induced_drag_saving_in_box"])
+    assert selection_score({**clean, "collisions": 1}) == float("inf")

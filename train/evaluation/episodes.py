@@ -210,6 +210,9 @@ def run_episodes(policy, config, seeds: Sequence[int], *, keep_series: bool = Fa
             m["box_outside_frac"] = float(np.mean(out_of_box))
             m["box_outside_longest_s"] = float(max(longest_run(out_of_box[:, j]) for j in range(a_n)) / config.control_hz)
             m["box_depth_max_m"] = float(np.max(box[:n, i]))
+            if sim.benefit_enabled:  # what the task is judged by: a decision outside the box saves nothing
+                inside = np.where(box[:n, i] > 0.0, 0.0, saving[:n, i])
+                m["induced_drag_saving_in_box"] = float(np.sum(inside) / ((n + missing) * a_n))
         if moving:
             fe = final_err[:n, i]
             ok = not (m["collision"] or m["crashed"]) and n >= round(sim.duration_s * config.control_hz)

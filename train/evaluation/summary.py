@@ -15,7 +15,7 @@ _MEAN_KEYS = ("return", "rms_slot_error_m", "rms_along_track_m", "rms_lateral_m"
               "time_within_1m_s", "time_within_1m_frac", "control_effort_rad", "throttle_mean", "action_rms",
               "fuel_used_kg", "leader_fuel_kg", "fuel_saving_pct", "induced_drag_saving", "harvest_ratio",
               "harvest_ratio_uncapped",
-              "drag_saving_pct_ell", "drag_saving_pct_6dof", "duration_s", "box_outside_frac")
+              "drag_saving_pct_ell", "drag_saving_pct_6dof", "duration_s", "box_outside_frac", "induced_drag_saving_in_box")
 
 
 def summarise(episodes: list[dict], *, n_boot: int = N_BOOT, seed: int = 0) -> dict:
@@ -60,12 +60,17 @@ def summarise(episodes: list[dict], *, n_boot: int = N_BOOT, seed: int = 0) -> d
 def selection_score(summary: dict) -> float:
     """Lower is better: the model-selection criterion of the eval callback (RMS slot error; a
     collision or crash disqualifies; failed reconfigurations add 100 m each as a fraction; in a
-    safe-box task, minus the mean induced-drag saving plus the fraction of episodes that left the box
-    for more than 1 s; in a task with a reference optimum, minus the harvest ratio)."""
+    safe-box task, minus the mean induced-drag saving with every decision outside the box counted as none
+    (without the benefit, the fraction of episodes more than 1 s outside); in a task with a reference optimum,
+    minus the harvest ratio)."""
     if summary["collisions"] or summary["crashes"]:
         return float("inf")
-    if "box_outside_over_1s" in summary:  # a safe-box task (wake surfing): the saving, inside the box
-        return float(-summary["induced_drag_saving"] + summary["box_outside_over_1s"] / summary["episodes"])
+    if "induced_drag_saving_in_box" in summary:  # a safe-box task (wake surfing): what it is judged by, the
+        # saving with every decision outside the box counted as none (issue 24; before, minus the saving as
+        # measured plus the fraction of episodes more than 1 s outside, which favoured a margin below the floor)
+        return float(-summary["induced_drag_saving_in_box"])
+    if "box_outside_over_1s" in summary:  # a safe-box task flown without the benefit: the time outside
+        return float(summary["box_outside_over_1s"] / summary["episodes"])
     if "harvest_ratio" in summary:  # a task with a reference optimum (close_formation): the harvest it exists for
         return float(-summary["harvest_ratio"])
     score = summary["rms_slot_error_m"]

@@ -17,7 +17,8 @@ import numpy as np
 
 from formation_env.rollout import FunctionPolicy, ZeroPolicy
 
-__all__ = ["fly", "pid_surfer", "pid_formation_surfer", "es_surfer", "oracle_surfer", "sb3_surfer", "OracleSetpoint"]
+__all__ = ["fly", "pid_surfer", "pid_formation_surfer", "es_surfer", "oracle_surfer", "oracle_keeper", "sb3_surfer",
+           "OracleSetpoint", "OracleKeeper"]
 
 
 def _ranges():
@@ -74,18 +75,27 @@ class OracleSetpoint:
     def observe(self, decision) -> None:
         self._decision = decision
 
-    def act(self, obs):
+    def _target_offset_m(self, n: int) -> np.ndarray:
+        """(n, 2): the target's starboard and down offsets from the nominal slot, m (the reference optimum of
+        the true steady wind and the leader's demanded track and air speed, ``margin_b`` below it)."""
         from formation_env.scenarios import AEROSONDE_SPAN_M
         from formation_env.tasks.wake_surfing.optimum import crab_angle_rad, reference_optimum
 
         d = self._decision
         if d is None:
-            raise RuntimeError("OracleSetpoint.act: needs the rollout's observe() first")
+            raise RuntimeError(f"{type(self).__name__}.act: needs the rollout's observe() first")
         vd0 = d.leader_velocity_demand_ned_mps
-        crab = crab_angle_rad(d.steady_wind_ned_mps, np.arctan2(vd0[:, 1], vd0[:, 0]), np.linalg.norm(vd0, axis=1))
+        air = np.linalg.norm(vd0 - d.steady_wind_ned_mps, axis=1)  # the demanded air speed (the reference's)
+        crab = crab_angle_rad(d.steady_wind_ned_mps, np.arctan2(vd0[:, 1], vd0[:, 0]), air)
         y, z, _ = reference_optimum(crab)
         slot = np.array([1.0, 0.3])  # the nominal slot's (y, z), spans
-        offset = (np.stack([y, np.asarray(z) + self.margin_b], axis=1) - slot) * AEROSONDE_SPAN_M
+        out = (np.stack([y, np.asarray(z) + self.margin_b], axis=1) - slot) * AEROSONDE_SPAN_M
+        if out.shape[0] != n:
+            raise RuntimeError(f"{type(self).__name__}.act: {out.shape[0]} decisions observed for {n} rows")
+        return out
+
+    def act(self, obs):
+        offset = self._target_offset_m(obs.shape[0])
         a = np.zeros((obs.shape[0], 4))
         a[:, 1] = self.along.setpoint_action(offset[:, 0], 1)
         a[:, 2] = self.along.setpoint_action(offset[:, 1], 2)
@@ -95,6 +105,49 @@ class OracleSetpoint:
 
 def oracle_surfer(margin_b: float, name: str | None = None) -> OracleSetpoint:
     return OracleSetpoint(margin_b, name)
+
+
+class OracleKeeper(OracleSetpoint):
+    """The ceiling with a precise holding loop: ``station_keeper`` (agents/station_keeper.py, tuned for
+    close_formation's cross-track precision) flown to the reference optimum of the episode's true steady wind,
+    ``margin_b`` spans below the box floor's optimum, with ``pid_formation``'s speed channel along the track (the
+    box's +-4 m/s: the keeper's own is 2). The keeper sees its observation with the slot error taken to that
+    target (its set-point offsets then shifted back by it), and its offsets pass through the box's set-point map,
+    which cannot command a set-point outside the box. Not a controller: it is told the optimum."""
+
+    def __init__(self, margin_b: float, name: str | None = None) -> None:
+        from agents.station_keeper import StationKeeper
+
+        super().__init__(margin_b, name or f"oracle_keeper_margin{margin_b:g}")
+        self.keeper = StationKeeper()
+
+    def reset(self, n_rows: int) -> None:
+        super().reset(n_rows)
+        self.keeper.reset(n_rows)
+
+    def act(self, obs):
+        from formation_env.envs.actions import SETPOINT_POSITION_SCALE_M
+        from formation_env.envs.observations import POSITION_SCALE_M, slog, to_dict
+
+        from agents.pid_formation import inverse_slog
+
+        obs = np.asarray(obs, dtype=float)
+        target = self._target_offset_m(obs.shape[0])  # (N, 2) starboard, down of the nominal slot, m
+        shifted = obs.copy()
+        err = to_dict(shifted, 2)["slot_position_error"]  # a view: the keeper's slot becomes the target
+        e = inverse_slog(err, POSITION_SCALE_M)
+        e[:, 1:] -= target
+        err[:] = slog(e, POSITION_SCALE_M)
+        k = self.keeper.act(shifted)
+        a = np.zeros((obs.shape[0], 4))
+        for axis in (1, 2):
+            a[:, axis] = self.along.setpoint_action(k[:, axis] * SETPOINT_POSITION_SCALE_M + target[:, axis - 1], axis)
+        a[:, 3] = self.along.act(obs)[:, 3]
+        return np.clip(a, -1.0, 1.0)
+
+
+def oracle_keeper(margin_b: float, name: str | None = None) -> OracleKeeper:
+    return OracleKeeper(margin_b, name)
 
 
 def sb3_surfer(path: str, name: str | None = None):
