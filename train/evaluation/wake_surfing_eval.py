@@ -38,7 +38,8 @@ from .aggregates import aggregates_table, evaluation_aggregates, plot_profiles, 
 from .comparisons import seed_groups
 from .marl_eval import marl_eval_data, training_steps, write_marl_eval
 from .stats import N_BOOT, bootstrap_ci, paired_comparison, wilson_interval
-from .wake_surfing_rollout import es_surfer, fly, oracle_surfer, pid_formation_surfer, pid_surfer, sb3_surfer
+from .wake_surfing_rollout import (es_surfer, fly, oracle_keeper, oracle_surfer, pid_formation_surfer, pid_surfer,
+                                  sb3_surfer)
 
 __all__ = ["evaluate_wake_surfing", "summarise_surfer", "paired_gain", "tune_es", "plot_surfing_figure", "main"]
 
@@ -132,11 +133,12 @@ def surfing_comparisons(episodes_by: dict[str, list[dict]], names: list[str], *,
 
 def evaluate_wake_surfing(policies, *, episodes: int = 100, seeds=None, es_gains=None, n_boot: int = N_BOOT,
                           turbulence_sigma_mps: float | None = None, oracle_margins_b=(), log=print,
-                          scenario: str = "wake_surfing") -> dict:
+                          scenario: str = "wake_surfing", oracle_keeper_margins_b=()) -> dict:
     """Every policy (SB3 zips) and the three baselines on the same held-out episodes; the report.
     ``turbulence_sigma_mps`` replaces the task's turbulence level (None: the task's); ``oracle_margins_b``
-    adds the oracle set-point ceilings (:func:`train.evaluation.wake_surfing_rollout.oracle_surfer`), reported
-    beside the controllers but compared with none. ``scenario``: one of :data:`SCENARIOS` (the task's preset)."""
+    adds the oracle set-point ceilings (:func:`train.evaluation.wake_surfing_rollout.oracle_surfer`) and
+    ``oracle_keeper_margins_b`` the oracle station-keeper ceilings (:func:`~.wake_surfing_rollout.oracle_keeper`),
+    reported beside the controllers but compared with none. ``scenario``: one of :data:`SCENARIOS` (the task's preset)."""
     from .episodes import eval_env_config
 
     if scenario not in SCENARIOS:
@@ -152,6 +154,7 @@ def evaluate_wake_surfing(policies, *, episodes: int = 100, seeds=None, es_gains
         names.append(s.name)
         surfers.append(s)
     surfers += [oracle_surfer(float(m)) for m in oracle_margins_b]
+    surfers += [oracle_keeper(float(m)) for m in oracle_keeper_margins_b]
     episodes_by = {}
     for s in surfers:
         t0 = time.perf_counter()
@@ -335,6 +338,9 @@ def _main(argv=None) -> int:
                    help="the task (default) or its randomised-leader variant (leader weight and speed drawn per episode)")
     p.add_argument("--oracle-margins", type=float, nargs="*", default=[0.05, 0.1],
                    help="oracle set-point ceilings to add, spans below the reference optimum")
+    p.add_argument("--oracle-keeper-margins", type=float, nargs="*", default=[],
+                   help="oracle station-keeper ceilings to add (station_keeper flown to the true-wind optimum), spans "
+                        "below the reference optimum, each in [0, 0.7]")
     a = p.parse_args(argv)
     if a.tune_es:
         rows = tune_es(ES_GRID)
@@ -355,8 +361,13 @@ def _main(argv=None) -> int:
         from formation_env.io import prepare_output_dir
 
         out = prepare_output_dir(a.out, overwrite=a.overwrite)
+    for m in list(a.oracle_margins) + list(a.oracle_keeper_margins):
+        if not (math.isfinite(m) and 0.0 <= m <= 0.7):
+            print(f"error: an oracle margin must be in [0, 0.7] spans (the box's depth), got {m}", file=sys.stderr)
+            return 2
     report = evaluate_wake_surfing(a.policies, episodes=a.episodes, turbulence_sigma_mps=a.turbulence,
-                                   oracle_margins_b=a.oracle_margins, scenario=a.scenario)
+                                   oracle_margins_b=a.oracle_margins, scenario=a.scenario,
+                                   oracle_keeper_margins_b=a.oracle_keeper_margins)
     if out is not None:
         from formation_env.io import atomic_write_json, atomic_write_text
 
