@@ -78,13 +78,17 @@ class ExtremumSeeking:
     then per decision ``observe(decision)`` (the measured saving) and ``act(obs (n_rows, D)) -> (n_rows, 4)``
     set-point actions in [-1, 1]. ``setpoint_low_m`` / ``setpoint_high_m`` (3,) are the env's set-point
     ranges (:func:`formation_env.sim.params.setpoint_ranges`), ``speed_range_mps`` its speed range
-    (:func:`formation_env.sim.params.setpoint_speed_range`). ``centre_m`` (n_rows, 2) is the set-point
-    centre (lateral, vertical offsets from the starting slot, m) ES has converged to so far."""
+    (:func:`formation_env.sim.params.setpoint_speed_range`). ``box_low_m`` / ``box_high_m`` (3,): the safe box's
+    walls as offsets from the slot (:func:`formation_env.sim.params.safe_box_offsets`), which hold the centre
+    (default: the set-point ranges; the two differ where the set-point map reaches beyond the box). ``centre_m``
+    (n_rows, 2) is the set-point centre (lateral, vertical offsets from the starting slot, m) ES has converged to
+    so far."""
 
     action_mode = "setpoints"
 
     def __init__(self, setpoint_low_m, setpoint_high_m, speed_range_mps: float,
-                 gains: ExtremumSeekingGains | None = None, control_hz: float = 10.0) -> None:
+                 gains: ExtremumSeekingGains | None = None, control_hz: float = 10.0, *, box_low_m=None,
+                 box_high_m=None) -> None:
         self.gains = ExtremumSeekingGains() if gains is None else gains
         if not isinstance(self.gains, ExtremumSeekingGains):
             raise ValueError(f"ExtremumSeeking: gains must be an ExtremumSeekingGains, got {type(gains).__name__}")
@@ -96,6 +100,11 @@ class ExtremumSeeking:
         if np.any(self.high[1:] - self.low[1:] <= 0):
             raise ValueError(f"ExtremumSeeking: the lateral and vertical set-point ranges must be open, got "
                              f"{self.low} .. {self.high}")
+        self.box_low = self.low.copy() if box_low_m is None else np.asarray(box_low_m, dtype=float).reshape(3)
+        self.box_high = self.high.copy() if box_high_m is None else np.asarray(box_high_m, dtype=float).reshape(3)
+        if np.any(self.box_high[1:] - self.box_low[1:] <= 0) or not np.all(np.isfinite(self.box_low) & np.isfinite(self.box_high)):
+            raise ValueError(f"ExtremumSeeking: the box must be finite and open laterally and vertically, got "
+                             f"{self.box_low} .. {self.box_high}")
         self.control_hz = float(control_hz)
         self.along = PIDFormation(control_hz=control_hz, setpoint_low_m=self.low, setpoint_high_m=self.high,
                                   speed_range_mps=speed_range_mps)
@@ -157,9 +166,9 @@ class ExtremumSeeking:
         amp = np.array([max(g.amplitude_y_m, 1e-9), max(g.amplitude_z_m, 1e-9)])
         demod = j_hp[:, None] * lagged * (2.0 / amp)  # J ~ J0 + dJ/dtheta a sin: 2/a <J sin> = dJ/dtheta
         self.gradient += dt * g.lowpass_rad_s * (demod - self.gradient)
-        # gradient ascent of the centre, held inside the range less the dither (anti-windup: clipped)
-        lo = self.low[1:] + np.array([g.amplitude_y_m, g.amplitude_z_m]) + g.margin_m
-        hi = self.high[1:] - np.array([g.amplitude_y_m, g.amplitude_z_m]) - g.margin_m
+        # gradient ascent of the centre, held inside the box less the dither (anti-windup: clipped)
+        lo = self.box_low[1:] + np.array([g.amplitude_y_m, g.amplitude_z_m]) + g.margin_m
+        hi = self.box_high[1:] - np.array([g.amplitude_y_m, g.amplitude_z_m]) - g.margin_m
         step = dt * np.array([g.gain_y, g.gain_z]) * self.gradient
         self.centre_m = np.clip(self.centre_m + step, np.minimum(lo, 0.0), np.maximum(hi, 0.0))
         self.t_s += dt
@@ -169,10 +178,14 @@ class ExtremumSeeking:
         err = self._slot_error_m(obs)[:, 1:3] - setpoint
         kp, ki = np.array([g.kp_y, g.kp_z]), np.array([g.ki_y, g.ki_z])
         demand = setpoint - kp * err - ki * self.integral
+        # the demand stays inside the box, as the seeker was designed and tuned (issue 16, when the set-point map
+        # ended at the walls); where the map reaches beyond the box (wake_surfing since issue 24) this keeps its
+        # tuned behaviour (the conditional integration below sees the clip as saturation)
+        demand = np.clip(demand, self.box_low[1:], self.box_high[1:])
         act = np.zeros((obs.shape[0], 4))
         act[:, 1] = self.along.setpoint_action(demand[:, 0], 1)
         act[:, 2] = self.along.setpoint_action(demand[:, 1], 2)
-        free = np.abs(act[:, 1:3]) < 1.0
+        free = (demand > self.box_low[1:]) & (demand < self.box_high[1:]) & (np.abs(act[:, 1:3]) < 1.0)
         self.integral += np.where(free | (np.sign(act[:, 1:3]) * err > 0), err * dt, 0.0)
         act[:, 3] = self.along.act(obs)[:, 3]
         return np.clip(act, -1.0, 1.0).astype(np.float32)

@@ -105,6 +105,11 @@ class Scenario:
     # (z_lo, z_hi)); None: no box. In ``setpoints`` mode the agent's set-point spans the box (see
     # formation_env.envs.actions) and the reward's ``box`` term charges leaving it.
     safe_box_b: tuple | None = None
+    # spans the ``setpoints`` action reaches beyond the safe box on each side, per axis (along, starboard, down;
+    # the along-track set-point stays fixed): the box is the reward's constraint, and a set-point map that stops
+    # at the wall leaves the thesis tracker's proportional loops no authority to hold a follower near it
+    # (wake_surfing, issue 24). A box is needed for any reach > 0.
+    setpoint_reach_b: tuple = (0.0, 0.0, 0.0)
     notes: dict = field(default_factory=dict)
     # how the ELL's wake reaches the 6-DOF unless EnvConfig.wake_coupling says otherwise
     # (formation_env.wake.coupling.COUPLINGS): the thesis's "effective_wind", or "load_weighted" (the energy tasks)
@@ -146,6 +151,16 @@ class Scenario:
                     if not all(lo <= o <= hi for o, (lo, hi) in zip(off, box)):
                         raise ValueError(f"Scenario.safe_box_b {box} must contain every slot keyframe, got {off}")
             object.__setattr__(self, "safe_box_b", box)
+        try:
+            reach = tuple(float(v) for v in self.setpoint_reach_b)
+        except (TypeError, ValueError):
+            raise ValueError(f"Scenario.setpoint_reach_b must be 3 finite numbers >= 0 (spans), got "
+                             f"{self.setpoint_reach_b!r}") from None
+        if len(reach) != 3 or not all(math.isfinite(v) and v >= 0 for v in reach):
+            raise ValueError(f"Scenario.setpoint_reach_b must be 3 finite numbers >= 0 (spans), got {self.setpoint_reach_b!r}")
+        if any(reach) and self.safe_box_b is None:
+            raise ValueError(f"Scenario.setpoint_reach_b {reach} needs a safe box (safe_box_b)")
+        object.__setattr__(self, "setpoint_reach_b", reach)
 
     @property
     def n_vehicles(self) -> int:

@@ -29,7 +29,7 @@ from .kernels import pack_limits
 
 __all__ = ["AircraftArrays", "WakeArrays", "ScenarioArrays", "ActionParams", "RewardParams", "StepParams",
            "ACTION_MODE_CODES", "wake_arrays", "scenario_arrays", "SURFACES", "RESIDUAL", "SETPOINTS", "safe_box_arrays",
-           "setpoint_ranges", "setpoint_speed_range", "slot_error_axes", "surface_scale", "RESIDUAL_SCALE",
+           "setpoint_ranges", "safe_box_offsets", "setpoint_speed_range", "slot_error_axes", "surface_scale", "RESIDUAL_SCALE",
            "TurbulenceParams", "TURBULENCE_CODES", "turbulence_params",
            "SETPOINT_POSITION_SCALE_M", "SETPOINT_SPEED_SCALE_MPS"]
 
@@ -229,17 +229,31 @@ def safe_box_arrays(sc) -> tuple[np.ndarray, np.ndarray]:
     return low, high
 
 
-def setpoint_ranges(sc) -> tuple[np.ndarray, np.ndarray]:
-    """(3,) set-point offsets (m, slot frame: along, starboard, down) of the ``setpoints`` action at -1 and
-    +1 per axis (piecewise linear, the slot at 0): +-5 m on every axis, or, in a scenario with a safe
-    box, the box around the first follower's starting slot with the along-track offset fixed (0).
-    The speed set-point's range is :func:`setpoint_speed_range`."""
+def safe_box_offsets(sc) -> tuple[np.ndarray, np.ndarray]:
+    """(3,) the safe box's walls as offsets from the first follower's starting slot (m, slot frame: along,
+    starboard, down), the along-track offsets 0 (the along-track set-point is fixed); a scenario without a box:
+    a ValueError."""
     if sc.safe_box_b is None:
-        return np.full(3, -SETPOINT_POSITION_SCALE_M), np.full(3, SETPOINT_POSITION_SCALE_M)
+        raise ValueError(f"safe_box_offsets: scenario {sc.name!r} has no safe box")
     slot = np.asarray(sc.slots[0].keyframes[0][1], float)
     box = np.asarray(sc.safe_box_b, float)
     span = sc.slots[0].span_m
     low, high = (box[:, 0] - slot) * span, (box[:, 1] - slot) * span
+    low[0] = high[0] = 0.0
+    return low, high
+
+
+def setpoint_ranges(sc) -> tuple[np.ndarray, np.ndarray]:
+    """(3,) set-point offsets (m, slot frame: along, starboard, down) of the ``setpoints`` action at -1 and
+    +1 per axis (piecewise linear, the slot at 0): +-5 m on every axis, or, in a scenario with a safe
+    box, the box around the first follower's starting slot (:func:`safe_box_offsets`) widened on each side by
+    the scenario's ``setpoint_reach_b`` spans per axis, with the along-track offset fixed (0).
+    The speed set-point's range is :func:`setpoint_speed_range`."""
+    if sc.safe_box_b is None:
+        return np.full(3, -SETPOINT_POSITION_SCALE_M), np.full(3, SETPOINT_POSITION_SCALE_M)
+    low, high = safe_box_offsets(sc)
+    reach = np.asarray(sc.setpoint_reach_b, float) * sc.slots[0].span_m
+    low, high = low - reach, high + reach
     low[0] = high[0] = 0.0
     return low, high
 

@@ -18,8 +18,12 @@ SC = get_scenario("wake_surfing")
 
 
 def _agent(**gains):
+    from formation_env.sim.params import safe_box_offsets
+
     low, high = setpoint_ranges(SC)
-    return ExtremumSeeking(low, high, setpoint_speed_range(SC), gains=ExtremumSeekingGains(**gains))
+    box_low, box_high = safe_box_offsets(SC)
+    return ExtremumSeeking(low, high, setpoint_speed_range(SC), gains=ExtremumSeekingGains(**gains),
+                           box_low_m=box_low, box_high_m=box_high)
 
 
 def test_converges_on_the_optimum_in_calm_air():
@@ -86,12 +90,17 @@ def test_setpoint_never_leaves_the_box():
     agent = _agent(gain_y=50.0, gain_z=50.0)
     agent.reset(2)
     obs = np.zeros((2, observation_size(2)), dtype=np.float32)
-    low, high = setpoint_ranges(SC)
+    from formation_env.sim.params import safe_box_offsets
+
+    low, high = safe_box_offsets(SC)  # the box's walls, inside the set-point map's reach
     for k in range(600):
         act = agent.act(obs, np.array([k * 0.01, -k * 0.01]))  # a saving that rises forever: the centre runs off
         assert np.all(np.abs(act) <= 1.0)
     centre = agent.centre_m
     assert np.all(centre >= low[1:] - 1e-12) and np.all(centre <= high[1:] + 1e-12)
+    assert np.any(np.isclose(centre, low[1:] + np.array([agent.gains.amplitude_y_m, agent.gains.amplitude_z_m])
+                             + agent.gains.margin_m)) or np.any(np.isclose(centre, high[1:] - np.array(
+                                 [agent.gains.amplitude_y_m, agent.gains.amplitude_z_m]) - agent.gains.margin_m))
 
 
 def test_bad_arguments_raise():

@@ -50,15 +50,29 @@ def test_box_contains_the_nominal_slot_and_excludes_the_wake_plane_band():
     np.testing.assert_allclose(high[1], box[:, 1] * B)
 
 
-def test_setpoint_action_spans_exactly_the_box_with_along_track_fixed():
+def test_setpoint_action_spans_the_box_and_its_reach_with_along_track_fixed():
+    from formation_env.sim.params import safe_box_offsets
+
     low, high = setpoint_ranges(SC)
     box = np.asarray(SC.safe_box_b)
     slot = np.asarray(SC.slots[0].keyframes[0][1])
+    reach = np.asarray(SC.setpoint_reach_b)
     assert low[0] == high[0] == 0.0
-    np.testing.assert_allclose(slot[1:] * B + low[1:], box[1:, 0] * B)  # action -1: the box's port / upper wall
-    np.testing.assert_allclose(slot[1:] * B + high[1:], box[1:, 1] * B)  # action +1: starboard / lower wall
+    assert reach[0] == 0.0 and reach[1] == 0.5 and reach[2] == 1.0  # issue 24: beyond the walls, not into the leader
+    # action -1: the box's port / upper wall less the reach; +1: starboard / lower wall plus it
+    np.testing.assert_allclose(slot[1:] * B + low[1:], (box[1:, 0] - reach[1:]) * B)
+    np.testing.assert_allclose(slot[1:] * B + high[1:], (box[1:, 1] + reach[1:]) * B)
+    b_low, b_high = safe_box_offsets(SC)  # the walls themselves
+    np.testing.assert_allclose(slot[1:] * B + b_low[1:], box[1:, 0] * B)
+    np.testing.assert_allclose(slot[1:] * B + b_high[1:], box[1:, 1] * B)
     other = get_scenario("close_formation")
     np.testing.assert_allclose(setpoint_ranges(other)[1], [5.0, 5.0, 5.0])  # unchanged elsewhere
+    with pytest.raises(ValueError, match="safe box"):
+        safe_box_offsets(other)
+    with pytest.raises(ValueError, match="setpoint_reach_b"):
+        dataclasses.replace(other, setpoint_reach_b=(0.0, 0.5, 0.0))  # a reach needs a box
+    with pytest.raises(ValueError, match="setpoint_reach_b"):
+        dataclasses.replace(SC, setpoint_reach_b=(0.0, -0.5, 0.0))
 
 
 @pytest.mark.parametrize("chi", [0.0, 0.7, -2.5])

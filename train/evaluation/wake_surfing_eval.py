@@ -41,7 +41,8 @@ from .stats import N_BOOT, bootstrap_ci, paired_comparison, wilson_interval
 from .wake_surfing_rollout import (es_surfer, fly, oracle_keeper, oracle_surfer, pid_formation_surfer, pid_surfer,
                                   sb3_surfer)
 
-__all__ = ["evaluate_wake_surfing", "summarise_surfer", "paired_gain", "tune_es", "plot_surfing_figure", "main"]
+__all__ = ["evaluate_wake_surfing", "surfing_report", "summarise_surfer", "paired_gain", "tune_es", "plot_surfing_figure",
+           "main"]
 
 BASELINE_NAMES = ("pid", "pid_formation", "extremum_seeking")
 SCENARIOS = ("wake_surfing", "wake_surfing_random_leader")  # the task and its randomised-leader variant
@@ -164,8 +165,22 @@ def evaluate_wake_surfing(policies, *, episodes: int = 100, seeds=None, es_gains
             f"[{summ['saving_ratio_ci'][0]:.3f}, {summ['saving_ratio_ci'][1]:.3f}], reached 80 % in "
             f"{summ['reached_80_frac']:.2f} of episodes, >1 s outside the box {summ['box_outside_over_1s']}, "
             f"collisions {summ['collisions']} ({time.perf_counter() - t0:.0f} s)")
-    report = {"scenario": scenario, "seeds": seeds, "turbulence_sigma_mps": config.randomisation.turbulence_sigma_mps,
-              "randomisation": dataclasses.asdict(config.randomisation), "controllers": {n: {"summary": summarise_surfer(e, n_boot=n_boot), "episodes": e}
+    specs = {s.name: str(p) for s, p in zip(surfers[3:], policies)}
+    return surfing_report(episodes_by, names, scenario=scenario, seeds=seeds, randomisation=config.randomisation,
+                          policy_specs=specs, n_boot=n_boot)
+
+
+def surfing_report(episodes_by: dict, names, *, scenario: str, seeds, randomisation, policy_specs=None,
+                   n_boot: int = N_BOOT) -> dict:
+    """The report of :func:`evaluate_wake_surfing` from the episodes every controller flew on ``seeds``
+    (``episodes_by``: name -> :func:`~.wake_surfing_rollout.fly`'s list; the baselines under their names, the
+    policies under ``names``, any other entry an oracle ceiling, summarised but compared with none)."""
+    seeds = [int(x) for x in seeds]
+    for n, e in episodes_by.items():
+        if [int(x["seed"]) for x in e] != seeds:
+            raise ValueError(f"surfing_report: {n!r} flew other episodes than the seeds given")
+    report = {"scenario": scenario, "seeds": seeds, "turbulence_sigma_mps": randomisation.turbulence_sigma_mps,
+              "randomisation": dataclasses.asdict(randomisation), "controllers": {n: {"summary": summarise_surfer(e, n_boot=n_boot), "episodes": e}
                                               for n, e in episodes_by.items()}}
     comps = surfing_comparisons(episodes_by, names, n_boot=n_boot)
     if len(names) >= 2:
@@ -174,7 +189,7 @@ def evaluate_wake_surfing(policies, *, episodes: int = 100, seeds=None, es_gains
                                  for k, v in {m: [report["controllers"][n]["summary"][m] for n in names]
                                               for m in ("saving", "saving_ratio", "time_to_80_s_mean_censored")}.items()}
     report["comparisons"] = comps
-    report["policy_specs"] = {s.name: str(p) for s, p in zip(surfers[3:], policies)}
+    report["policy_specs"] = dict(policy_specs or {})
     report["groups"] = surfing_groups(names)
     report["aggregates"] = evaluation_aggregates(episodes_by, report["groups"], list(BASELINE_NAMES), n_boot=n_boot)
     report["markdown"] = markdown(report)

@@ -47,9 +47,12 @@ def pid_formation_surfer():
 
 def es_surfer(gains=None, name: str = "extremum_seeking"):
     from agents.extremum_seeking import ExtremumSeeking
+    from formation_env.scenarios import get_scenario
+    from formation_env.sim.params import safe_box_offsets
 
     low, high, speed = _ranges()
-    agent = ExtremumSeeking(low, high, speed, gains=gains)
+    box_low, box_high = safe_box_offsets(get_scenario("wake_surfing"))
+    agent = ExtremumSeeking(low, high, speed, gains=gains, box_low_m=box_low, box_high_m=box_high)
     agent.name = name
     return agent
 
