@@ -35,14 +35,42 @@ def pid_surfer():
     return ZeroPolicy()
 
 
-def pid_formation_surfer():
-    """``pid_formation`` at the nominal slot (its set-point ranges mapped onto the safe box's)."""
-    from agents.pid_formation import PIDFormation
+class _BoxedPIDFormation:
+    """``pid_formation`` with its position set-point offsets held inside the safe box: where the set-point map
+    reaches beyond the box (wake_surfing since issue 24) it flies as it was evaluated before (issue 16, when the
+    map ended at the walls: an episode's saving the same to 1e-8, round-off through the two maps); unclipped, on the 100 held-out episodes at sigma 0.25 it was outside the box in 24 %
+    of the decisions (11.5 % clipped), held 0.140 of the optimum (0.163 clipped) and collided once."""
 
-    low, high, speed = _ranges()
-    agent = PIDFormation(setpoint_low_m=low, setpoint_high_m=high, speed_range_mps=speed)
-    agent.name = "pid_formation"
-    return agent
+    name = "pid_formation"
+
+    def __init__(self) -> None:
+        from agents.pid_formation import PIDFormation
+        from formation_env.scenarios import get_scenario
+        from formation_env.sim.params import safe_box_offsets
+
+        low, high, speed = _ranges()
+        self.box_low, self.box_high = safe_box_offsets(get_scenario("wake_surfing"))
+        # the agent maps its offsets onto the box (its action +-1: the walls, and its integrators stop there), as it did
+        self.agent = PIDFormation(setpoint_low_m=self.box_low, setpoint_high_m=self.box_high, speed_range_mps=speed)
+        self.low, self.high = low, high
+
+    def reset(self, n_rows: int) -> None:
+        self.agent.reset(n_rows)
+
+    def reset_rows(self, rows) -> None:
+        self.agent.reset_rows(rows)
+
+    def act(self, obs):
+        a = np.array(self.agent.act(obs), dtype=float)
+        for axis in (1, 2):  # the agent's offset (on the box's map) as the env's action (on the map with the reach)
+            off = np.where(a[:, axis] >= 0, a[:, axis] * self.box_high[axis], -a[:, axis] * self.box_low[axis])
+            a[:, axis] = np.where(off >= 0, off / self.high[axis], -off / self.low[axis])
+        return np.clip(a, -1.0, 1.0).astype(np.float32)
+
+
+def pid_formation_surfer():
+    """``pid_formation`` at the nominal slot, its set-point offsets held inside the safe box."""
+    return _BoxedPIDFormation()
 
 
 def es_surfer(gains=None, name: str = "extremum_seeking"):
