@@ -33,6 +33,19 @@ def test_training_hyperparameters_pose_the_task_preset():
     assert cfg.compute_benefit
 
 
+def test_variant_training_hyperparameters_pose_the_variant_preset():
+    """The randomised-leader variant trains on its own preset (the task's reward, its leader draws) plus the task
+    recipe's training-only terms: the 1 m jitter and the turbulence drawn in [0, 0.5] m/s."""
+    from formation_env.tasks.wake_surfing import RANDOM_LEADER_RANDOMISATION
+
+    env = load_hyperparams("ppo", "wake_surfing_random_leader")["env_kwargs"]
+    assert env["compute_benefit"] is True
+    assert RewardWeights(**env["reward"]) == WAKE_SURFING_REWARD
+    assert Randomisation(**env["randomisation"]) == dataclasses.replace(
+        RANDOM_LEADER_RANDOMISATION, initial_offset_m=1.0, turbulence_sigma_mps=0.5, turbulence_sigma_spread=1.0)
+    assert load_hyperparams("ppo", "wake_surfing_random_leader")["n_timesteps"] == 2000000
+
+
 def test_paired_gain_signs():
     base = np.linspace(0.1, 0.3, 50)
     gain = paired_gain(base, base + 0.05, n_boot=500)
