@@ -120,3 +120,24 @@ def test_the_randomised_leader_variant_flies_with_its_own_reference():
     assert base["reference_factor"] == 1.0 and base["leader_mass_kg"] == pytest.approx(10.5)
     with pytest.raises(ValueError, match="scenario must be one of"):
         evaluate_wake_surfing([], scenario="close_formation", episodes=1)
+
+
+def test_the_committed_variant_record_is_what_its_policy_flies():
+    """The committed held-out record of the variant-trained policies (train/policies/
+    wake_surfing_random_leader_ppo_setpoints_levels.json) is reproduced by flying the committed zip on the
+    record's first two held-out episodes: the same saving ratio per episode (the record rounds to 5 digits)."""
+    import json
+
+    root = Path(__file__).resolve().parents[2] / "train" / "policies"
+    record = json.loads((root / "wake_surfing_random_leader_ppo_setpoints_levels.json").read_text())
+    level = record["levels"]["wake_surfing_random_leader_sigma_0.25"]
+    name = "wake_surfing_random_leader_ppo_setpoints_seed1"
+    first = level["episode_seeds"][0]
+    cfg = eval_env_config("wake_surfing_random_leader", "setpoints", turbulence_sigma_mps=0.25)
+    eps = fly(sb3_surfer(str(root / f"{name}.zip"), name), [first, first + 1], config=cfg)
+    want = level["episodes"][name]["saving_ratio"][:2]
+    got = [e["saving_ratio"] for e in eps]
+    assert got == pytest.approx(want, rel=1e-4, abs=1e-5)
+    # and the summary is the mean of the record's own episodes (the record is one evaluation, not a mix)
+    cols = level["episodes"][name]["saving_ratio"]
+    assert len(cols) == 100 and level["summaries"][name]["saving_ratio"] == pytest.approx(np.mean(cols), abs=1e-4)
