@@ -6,11 +6,9 @@ from __future__ import annotations
 
 import json
 import os
-import shutil
 import socket
 import subprocess
 import sys
-import tempfile
 import time
 from pathlib import Path
 
@@ -29,62 +27,18 @@ TINY = {"training": {"train_batch_size_per_learner": 200, "minibatch_size": 100,
         "model": {"fcnet_hiddens": [16]}, "env_kwargs": {"duration_s": 3.0}, "checkpoint_every": 1}
 
 
-@pytest.fixture
-def ray_tmpdir():
-    """A private, short Ray temp dir (Unix socket paths must stay under ~100 characters); every Ray
-    process started with it carries its path, which is how the tests find leftovers."""
-    path = tempfile.mkdtemp(prefix="fe-ray-", dir="/tmp")
-    yield path
-    shutil.rmtree(path, ignore_errors=True)
+# ray_tmpdir, ray_processes (leftover checks) and loopback_only_prefix are shared fixtures: tests/train/conftest.py
 
 
-def _processes_mentioning(text: str) -> list[str]:
-    found = []
-    for pid in os.listdir("/proc"):
-        if not pid.isdigit() or int(pid) == os.getpid():
-            continue
-        try:
-            cmd = Path(f"/proc/{pid}/cmdline").read_bytes().replace(b"\0", b" ").decode(errors="replace")
-        except OSError:
-            continue
-        if text in cmd:
-            found.append(f"{pid}: {cmd[:160]}")
-    return found
-
-
-def _assert_no_ray_left(tmpdir: str) -> None:
-    deadline = time.time() + 20.0  # raylet/GCS exit asynchronously after ray.shutdown()
-    while (left := _processes_mentioning(tmpdir)) and time.time() < deadline:
-        time.sleep(0.5)
-    assert not left, f"Ray processes left running: {left}"
-
-
-def _loopback_only_prefix() -> list[str]:
-    """Run in a fresh network namespace whose only interface is loopback, where possible (root, or
-    unprivileged user namespaces): Ray's servers listen on every interface and address the node by the
-    machine's IP; there the only interface is 127.0.0.1, so nothing of the test's Ray is reachable from
-    outside this machine, nor can it reach out."""
-    if not (shutil.which("unshare") and shutil.which("ip")):
-        return []
-    for flags in (["-n"], ["-r", "-n"]):
-        try:
-            ok = subprocess.run(["unshare", *flags, "ip", "link", "set", "lo", "up"], capture_output=True,
-                                timeout=20).returncode == 0
-        except (OSError, subprocess.SubprocessError):
-            ok = False
-        if ok:
-            return ["unshare", *flags, "sh", "-c", 'ip link set lo up && exec "$@"', "sh"]
-    return []
-
-
-def _cli(args, tmpdir, cwd):
+def _cli(args, tmpdir, cwd, prefix):
     env = dict(os.environ, RAY_TMPDIR=tmpdir, PYTHONPATH=str(REPO))
     env.pop("RAY_ADDRESS", None)
-    return subprocess.run(_loopback_only_prefix() + CLI + args, cwd=cwd, env=env, capture_output=True, text=True,
+    return subprocess.run(prefix + CLI + args, cwd=cwd, env=env, capture_output=True, text=True,
                           timeout=480)
 
 
-def test_rllib_trains_checkpoints_restores_and_evaluates_on_loopback_ray(tmp_path, ray_tmpdir):
+def test_rllib_trains_checkpoints_restores_and_evaluates_on_loopback_ray(tmp_path, ray_tmpdir, ray_processes,
+                                                                         loopback_only_prefix):
     cfg = tmp_path / "tiny.yml"
     cfg.write_text(yaml.safe_dump(TINY))
     run = tmp_path / "run"
@@ -92,11 +46,11 @@ def test_rllib_trains_checkpoints_restores_and_evaluates_on_loopback_ray(tmp_pat
     base = ["train", "--backend", "rllib", "--scenario", "formation_keeping", "--num-cpus", "2", "--out", "run"]
 
     r = _cli(base + ["--num-env-runners", "2", "--iterations", "2", "--seed", "3", "--config", str(cfg)],
-             ray_tmpdir, tmp_path)
+             ray_tmpdir, tmp_path, loopback_only_prefix)
     assert r.returncode == 0, r.stdout[-3000:] + r.stderr[-3000:]
-    if _loopback_only_prefix():  # inside the namespace the only address Ray can find is loopback
+    if loopback_only_prefix:  # inside the namespace the only address Ray can find is loopback
         assert "node address 127.0.0.1" in r.stdout  # read back from ray.nodes()
-    _assert_no_ray_left(ray_tmpdir)
+    ray_processes.assert_none_left()
     ck2 = run / "checkpoints" / "iter_000002"
     meta = json.loads((ck2 / "formation_env.json").read_text())
     assert meta["modules"] == ["shared"] and meta["iteration"] == 2 and meta["env_steps"] == 400
@@ -109,14 +63,15 @@ def test_rllib_trains_checkpoints_restores_and_evaluates_on_loopback_ray(tmp_pat
     assert summary["num_env_runners"] == 2 and summary["iterations"] == 2
 
     # The same directory is never silently reused.
-    r = _cli(base + ["--iterations", "1"], ray_tmpdir, tmp_path)
+    r = _cli(base + ["--iterations", "1"], ray_tmpdir, tmp_path, loopback_only_prefix)
     assert r.returncode == 2 and "not empty" in r.stderr
 
     # Resume: restores iteration 2 (weights, optimiser, counters) and goes on to 3.
-    r = _cli(base + ["--resume", "--iterations", "3", "--num-env-runners", "1"], ray_tmpdir, tmp_path)
+    r = _cli(base + ["--resume", "--iterations", "3", "--num-env-runners", "1"], ray_tmpdir, tmp_path,
+             loopback_only_prefix)
     assert r.returncode == 0, r.stdout[-3000:] + r.stderr[-3000:]
     assert "resuming" in r.stdout and "iter_000002" in r.stdout
-    _assert_no_ray_left(ray_tmpdir)
+    ray_processes.assert_none_left()
     meta3 = json.loads((run / "checkpoints" / "iter_000003" / "formation_env.json").read_text())
     assert meta3["iteration"] == 3 and meta3["env_steps"] == 600
     assert len((run / "progress.csv").read_text().splitlines()) == 4
@@ -136,7 +91,7 @@ def test_rllib_trains_checkpoints_restores_and_evaluates_on_loopback_ray(tmp_pat
     out = tmp_path / "eval"
     r = _cli(["evaluate", "--scenario", "formation_keeping", "--policy", str(run), "--policy", str(sb3),
               "--policy", "pid", "--episodes", "2", "--duration", "3", "--no-plots", "--out", str(out)],
-             ray_tmpdir, tmp_path)
+             ray_tmpdir, tmp_path, loopback_only_prefix)
     assert r.returncode == 0, r.stdout[-3000:] + r.stderr[-3000:]
     res = json.loads((out / "results.json").read_text())
     names = list(res["policies"])
@@ -145,10 +100,10 @@ def test_rllib_trains_checkpoints_restores_and_evaluates_on_loopback_ray(tmp_pat
         assert p["summary"]["episodes"] == 2 and np.isfinite(p["summary"]["rms_slot_error_m"])
     header = (out / "results.md").read_text()
     assert all(n in header for n in names)
-    _assert_no_ray_left(ray_tmpdir)
+    ray_processes.assert_none_left()
 
 
-def test_rllib_per_role_policies_train_leader_and_follower(tmp_path, ray_tmpdir, monkeypatch):
+def test_rllib_per_role_policies_train_leader_and_follower(tmp_path, ray_tmpdir, ray_processes, monkeypatch):
     import ray
 
     from train.rllib.backend import load_rllib_policy, train_rllib
@@ -158,7 +113,7 @@ def test_rllib_per_role_policies_train_leader_and_follower(tmp_path, ray_tmpdir,
     s = train_rllib(scenario="echelon", action_mode="surfaces", learning="all", policies="per-role", iterations=1,
                     num_env_runners=0, num_cpus=1, out_dir=tmp_path / "run", overrides=TINY, log=lambda m: None)
     assert not ray.is_initialized()
-    _assert_no_ray_left(ray_tmpdir)
+    ray_processes.assert_none_left()
     assert s["modules"] == ["leader", "follower"]
     ck = Path(s["checkpoint"])
     for m in ("leader", "follower"):
@@ -171,7 +126,7 @@ def test_rllib_per_role_policies_train_leader_and_follower(tmp_path, ray_tmpdir,
         load_rllib_policy(ck, module_id="shared")
 
 
-def test_rllib_same_seed_reproduces_the_run_with_two_env_runners(tmp_path, ray_tmpdir, monkeypatch):
+def test_rllib_same_seed_reproduces_the_run_with_two_env_runners(tmp_path, ray_tmpdir, ray_processes, monkeypatch):
     import ray
     import yaml as _yaml
 
@@ -240,7 +195,7 @@ def test_rllib_same_seed_reproduces_the_run_with_two_env_runners(tmp_path, ray_t
         assert not list(runs["c"].glob("summary-resume-*.json"))
     finally:
         ray.shutdown()
-    _assert_no_ray_left(ray_tmpdir)
+    ray_processes.assert_none_left()
 
 
 def _obs_size(n_vehicles: int) -> int:
@@ -289,7 +244,7 @@ def test_rllib_env_runners_and_resumes_draw_distinct_episodes():
     assert not np.array_equal(base, first_obs(1, 102, stream=40))  # the same runner after a resume
 
 
-def test_address_parsing_and_unreachable_cluster_errors(capsys, tmp_path, monkeypatch):
+def test_address_parsing_and_unreachable_cluster_errors(capsys, tmp_path, monkeypatch, ray_tmpdir):
     from train.rllib.backend import ClusterUnreachableError, check_reachable, connect, parse_address
 
     assert parse_address(None) is None and parse_address("local") is None and parse_address("auto") == "auto"
@@ -306,7 +261,7 @@ def test_address_parsing_and_unreachable_cluster_errors(capsys, tmp_path, monkey
         check_reachable("127.0.0.1", port)
     assert time.perf_counter() - t0 < 30  # refused at once, not after Ray's minute of retries
     monkeypatch.delenv("RAY_ADDRESS", raising=False)
-    monkeypatch.setenv("RAY_TMPDIR", tempfile.mkdtemp(prefix="fe-ray-", dir="/tmp"))
+    monkeypatch.setenv("RAY_TMPDIR", ray_tmpdir)
     with pytest.raises(ClusterUnreachableError, match="no running Ray cluster"):
         connect("auto", log=lambda m: None)
     out = tmp_path / "run"

@@ -28,7 +28,16 @@ Run directory (a new directory; ``resume`` continues one)::
                                         temporary directory and renamed into place, with
                                         formation_env.json (what `formation-env evaluate` needs)
     progress.csv                        one row per iteration (steps, return, sampling throughput)
-    summary.json                        wall time, steps, throughput, last checkpoint
+    summary.json                        wall time, steps, throughput, last checkpoint, and where the env
+                                        runners ran (``env_runner_nodes``, below)
+
+Where the env runners ran: after every iteration the driver asks each env runner for the Ray node it
+lives on (``ray.get_runtime_context().get_node_id()`` and the node's IP, one small remote call per
+runner); ``summary.json`` lists every distinct (runner, node) pair seen as ``env_runner_nodes``
+(``[{"runner": 1, "node_id": "...", "node_ip": "..."}, ...]``; a runner Ray restarted on another node
+appears twice; with 0 env runners the driver samples and is listed as runner 0) and ``nodes_used``,
+the number of distinct nodes among them. ``custom_resources_per_env_runner`` (hyperparameters) places
+the runners on the nodes that offer those Ray resources.
 
 Steps are RLlib env steps: one decision of the whole formation (0.1 s). With the default
 ``learning="followers"`` in a two-UAV scenario that is one follower decision, the unit of SB3's steps.
@@ -56,7 +65,7 @@ from ..config import merge_config
 from .bench import benchmark_sampling
 from .checkpoints import (_CKPT, CHECKPOINT_META, _save_checkpoint, checkpoint_metadata, is_rllib_checkpoint,
                           latest_rllib_checkpoint)
-from .cluster import DISTRIBUTED_INSTALL, check_reachable, connect, parse_address, require_rllib
+from .cluster import DISTRIBUTED_INSTALL, check_reachable, connect, parse_address, require_rllib, runner_node
 from .config import (LEARNING_MODES, POLICY_MODES, RLlibTrainConfig, build_algo_config, env_config_dict,
                      load_rllib_hyperparams)
 from .policy import load_rllib_policy
@@ -152,8 +161,14 @@ def train_rllib(*, scenario: str | None = None, action_mode: str | None = None, 
         _check_new_run_dir(run_dir, overwrite)
         ck = None
 
+    import ray
+
+    if parse_address(address) is None and not ray.is_initialized():
+        _check_custom_resources(cfg, local=True, log=log)  # before a local instance starts
     started = connect(address, num_cpus=num_cpus, log=log)
     try:
+        if not started:
+            _check_custom_resources(cfg, local=False, log=log)
         algo = build_algo_config(cfg, episode_stream=ck[1] if ck else 0).build_algo()
         try:
             if ck is None:
@@ -167,9 +182,45 @@ def train_rllib(*, scenario: str | None = None, action_mode: str | None = None, 
             algo.stop()
     finally:
         if started:
-            import ray
-
             ray.shutdown()
+
+
+def _check_custom_resources(cfg: RLlibTrainConfig, *, local: bool, log) -> None:
+    """Env runners that ask for custom resources no node offers would wait for them forever: refused
+    on a local instance (it offers none); on a cluster, where an autoscaler may still add such nodes,
+    a warning names what is missing."""
+    wanted = cfg.custom_resources_per_env_runner
+    if not wanted or cfg.num_env_runners == 0:
+        return
+    if local:
+        raise ValueError(f"custom_resources_per_env_runner {wanted} asks for Ray resources that a local Ray instance "
+                         "does not offer (its nodes have only CPUs); give --address of a cluster whose nodes were "
+                         "started with `ray start --resources '{...}'`, or leave the key out")
+    import ray
+
+    total = ray.cluster_resources()
+    short = {k: (total.get(k, 0.0), v * cfg.num_env_runners) for k, v in wanted.items()
+             if total.get(k, 0.0) < v * cfg.num_env_runners}
+    if short:
+        log("warning: the cluster offers " + ", ".join(f"{k}: {have:g} (the {cfg.num_env_runners} env runners need "
+                                                        f"{need:g})" for k, (have, need) in short.items())
+            + "; the runners that do not fit wait for nodes that offer it")
+
+
+def _record_runner_nodes(algo, cfg: RLlibTrainConfig, seen: list[dict], log) -> None:
+    """Add the env runners' current (runner, node) pairs to ``seen``; log them when they change."""
+    try:
+        now = algo.env_runner_group.foreach_env_runner(runner_node, local_env_runner=cfg.num_env_runners == 0,
+                                                       timeout_seconds=30.0)
+    except Exception as exc:  # noqa: BLE001 - a bookkeeping query never stops training
+        log(f"warning: could not ask the env runners where they run: {type(exc).__name__}: {exc}")
+        return
+    new = [p for p in sorted(now, key=lambda p: p["runner"]) if p not in seen]
+    if new:
+        seen.extend(new)
+        seen.sort(key=lambda p: p["runner"])
+        log("env runners on " + ", ".join(f"runner {p['runner']}: node {p['node_id'][:12]} ({p['node_ip']})"
+                                          for p in new))
 
 
 _OWN_FILES = ("progress.csv", "summary.json", "config.yaml")
@@ -263,8 +314,10 @@ def _train_loop(algo, cfg: RLlibTrainConfig, run_dir: Path, ck, log) -> dict:
         f"-> {run_dir}")
     t0 = time.perf_counter()
     last_ck = ck[0] if ck else None
+    runner_nodes: list[dict] = []
     while not _done(cfg, algo.iteration, env_steps):
         result = algo.train()
+        _record_runner_nodes(algo, cfg, runner_nodes, log)
         row = _progress_row(result, cfg.reward_scale)
         env_steps = row["env_steps_lifetime"]
         rows.append(row)
@@ -283,7 +336,8 @@ def _train_loop(algo, cfg: RLlibTrainConfig, run_dir: Path, ck, log) -> dict:
                "resumed_from_iteration": start_iter or None, "num_env_runners": cfg.num_env_runners,
                "num_envs_per_env_runner": cfg.num_envs_per_env_runner,
                "wall_s": round(wall, 1), "env_steps_per_s": round(sampled / wall, 1) if wall > 0 else None,
-               "checkpoint": str(last_ck)}
+               "checkpoint": str(last_ck), "env_runner_nodes": runner_nodes,
+               "nodes_used": len({p["node_id"] for p in runner_nodes})}
     name = "summary.json" if not start_iter else f"summary-resume-{start_iter}.json"
     atomic_write_json(run_dir / name, summary, overwrite=True)
     log(f"done in {wall:.0f} s: iteration {algo.iteration}, {env_steps} env steps -> {last_ck}")

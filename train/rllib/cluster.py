@@ -12,7 +12,7 @@ from collections.abc import Callable
 
 from formation_env.errors import ClusterUnreachableError, MissingDependencyError
 
-__all__ = ["require_rllib", "parse_address", "check_reachable", "connect", "ClusterUnreachableError",
+__all__ = ["require_rllib", "parse_address", "check_reachable", "connect", "runner_node", "ClusterUnreachableError",
            "DISTRIBUTED_INSTALL"]
 
 DISTRIBUTED_INSTALL = 'pip install -e ".[distributed]"'
@@ -153,3 +153,14 @@ def connect(address: str | None = None, *, num_cpus: int | None = None, log: Cal
     res = ray.cluster_resources()
     log(f"joined the Ray cluster at {address} ({len(ray.nodes())} node(s), {int(res.get('CPU', 0))} CPUs)")
     return False
+
+
+def runner_node(runner) -> dict:
+    """Where an RLlib env runner lives: ``{"runner": its index, "node_id": the Ray node's id (hex),
+    "node_ip": the node's IP}``. The training loop calls it inside each runner
+    (``EnvRunnerGroup.foreach_env_runner``); it lives here, in a module that imports little, because
+    every runner imports it by name."""
+    import ray
+
+    return {"runner": int(runner.worker_index or 0), "node_id": ray.get_runtime_context().get_node_id(),
+            "node_ip": ray.util.get_node_ip_address()}

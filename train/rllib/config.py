@@ -21,7 +21,10 @@ _PPO_KEYS = {"lr", "gamma", "lambda_", "clip_param", "vf_clip_param", "vf_loss_c
 _MODEL_KEYS = {"fcnet_hiddens", "fcnet_activation", "vf_share_layers", "free_log_std", "log_std_clip_param",
                "fcnet_use_layernorm"}
 _TOP_KEYS = {"n_timesteps", "iterations", "num_env_runners", "num_envs_per_env_runner", "num_cpus_per_env_runner",
-             "checkpoint_every", "reward_scale", "training", "model", "env_kwargs", "learning", "policies"}
+             "custom_resources_per_env_runner", "checkpoint_every", "reward_scale", "training", "model", "env_kwargs",
+             "learning", "policies"}
+# Ray's built-in resources, which Ray refuses as custom ones (num_cpus_per_env_runner sets the CPUs).
+_BUILTIN_RESOURCES = ("CPU", "GPU", "memory", "object_store_memory")
 
 
 @dataclass
@@ -38,6 +41,10 @@ class RLlibTrainConfig:
     num_env_runners: int = 2
     num_envs_per_env_runner: int = 1
     num_cpus_per_env_runner: int = 1
+    # Ray custom resources each env runner requests, e.g. {"sampler": 1}: a runner then goes only to a node
+    # started with `ray start --resources '{"sampler": N}'`, and such a node takes at most N runners
+    # (docs/distributed.md, "A real multi-node run").
+    custom_resources_per_env_runner: dict = field(default_factory=dict)
     checkpoint_every: int = 10
     reward_scale: float = 1.0
     training: dict = field(default_factory=dict)
@@ -79,6 +86,7 @@ class RLlibTrainConfig:
             bad = sorted(set(value) - valid)
             if bad:
                 raise ValueError(f"unknown {name} key(s) {bad}; valid: {sorted(valid)}")
+        self._check_custom_resources()
         # Validates the environment options here, without ray (the env itself is built on the runners).
         from formation_env.scenarios import get_scenario
 
@@ -86,6 +94,26 @@ class RLlibTrainConfig:
         if self.learning == "followers" and not get_scenario(self.scenario).slots:
             raise ValueError(f"scenario {self.scenario!r} flies one UAV: there are no followers to learn "
                              "(use learning='all')")
+
+    def _check_custom_resources(self) -> None:
+        res = self.custom_resources_per_env_runner
+        if res is None:
+            res = self.custom_resources_per_env_runner = {}
+        if not isinstance(res, dict):
+            raise ValueError("custom_resources_per_env_runner must be a mapping of Ray resource names to amounts "
+                             f"> 0, got {type(res).__name__}")
+        for name, amount in res.items():
+            if not isinstance(name, str) or not name.strip():
+                raise ValueError(f"custom_resources_per_env_runner: resource names must be non-empty strings, "
+                                 f"got {name!r}")
+            if name in _BUILTIN_RESOURCES:
+                raise ValueError(f"custom_resources_per_env_runner: {name!r} is one of Ray's built-in resources "
+                                 f"{list(_BUILTIN_RESOURCES)}, not a custom one (CPUs per runner: "
+                                 "num_cpus_per_env_runner)")
+            if isinstance(amount, bool) or not isinstance(amount, (int, float)) or not math.isfinite(amount) \
+                    or amount <= 0:
+                raise ValueError(f"custom_resources_per_env_runner[{name!r}] must be a finite number > 0, "
+                                 f"got {amount!r}")
 
     @property
     def modules(self) -> list[str]:
@@ -137,7 +165,9 @@ def build_algo_config(cfg: RLlibTrainConfig, episode_stream: int = 0):
         PPOConfig()
         .environment(FormationMultiAgentEnv, env_config=env_config_dict(cfg, episode_stream))
         .env_runners(num_env_runners=cfg.num_env_runners, num_envs_per_env_runner=cfg.num_envs_per_env_runner,
-                     num_cpus_per_env_runner=cfg.num_cpus_per_env_runner, rollout_fragment_length="auto")
+                     num_cpus_per_env_runner=cfg.num_cpus_per_env_runner,
+                     custom_resources_per_env_runner=dict(cfg.custom_resources_per_env_runner),
+                     rollout_fragment_length="auto")
         .multi_agent(policies=set(cfg.modules), policy_mapping_fn=mapping)
         .rl_module(rl_module_spec=MultiRLModuleSpec(rl_module_specs={m: RLModuleSpec() for m in cfg.modules}),
                    model_config=DefaultModelConfig(**cfg.model))
