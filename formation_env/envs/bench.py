@@ -77,6 +77,8 @@ def _run(code_root: str | None, cases: list[dict], threads: int, busy: bool, bud
 
 
 def _key(case: dict) -> str:
+    if case["kind"] == "machine":
+        return "machine: fixed numpy workload"
     if case["kind"] == "single":
         return f"single {case['mode']} learning={case['learning']}"
     return f"vector B={case['formations']} {case['mode']} learning={case['learning']}" + (
@@ -92,7 +94,9 @@ def run_benchmarks(quick: bool = False, baseline: str | None = None, busy: bool 
                                                     "learning": "followers", "benefit": True}] + [
         # the turbulence models at sigma 1 m/s (their cost against the B = 256 case without turbulence)
         {"kind": "vector", "formations": 256, "mode": "setpoints", "learning": "followers", "turbulence": field}
-        for field in TURBULENCE_CASES]
+        for field in TURBULENCE_CASES] + [
+        # the machine's own decision-to-decision spread (a fixed numpy workload), beside the env's
+        {"kind": "machine"}]
     configs = [(2, False), (1, False)] + ([(2, True), (1, True)] if busy else [])
     out: dict = {"case": "formation_keeping, 2 Aerosondes, ELL wake every 50 Hz physics step, 10 Hz decisions",
                  "baseline": baseline, "peers_reported": PEERS, "configurations": {}}
@@ -116,10 +120,17 @@ def run_benchmarks(quick: bool = False, baseline: str | None = None, busy: bool 
         old = _run(baseline, cases, threads, is_busy, budget, repeats, progress(name, " (baseline)")) if baseline else None
         rows = {}
         for i, case in enumerate(cases):
+            if case["kind"] == "machine":
+                out.setdefault("machine_spread", {})[name] = {"new": new[i], **({"old": old[i]} if old else {})}
+                continue
             metric = "physics_steps_per_s" if case["kind"] == "single" else "uav_physics_steps_per_s"
             if "unsupported" in new[i]:
                 raise RuntimeError(f"bench case {_key(case)}: {new[i]['unsupported']}")
             row = {"new": new[i][metric]}
+            if "decision_max_over_min" in new[i]:  # issue 26: the slowest of 40 consecutive decisions over the fastest
+                row["spread"] = new[i]["decision_max_over_min"]
+                if old is not None and "decision_max_over_min" in old[i]:
+                    row["spread_old"] = old[i]["decision_max_over_min"]
             if old is not None and "unsupported" not in old[i]:
                 row["old"] = old[i][metric]
                 row["ratio"] = row["new"] / row["old"]
@@ -141,4 +152,15 @@ def format_table(res: dict) -> str:
             r = res["configurations"][c][key]
             cells.append(f"{r['new']:,.0f}" + (f" ({r['ratio']:.1f}x)" if "ratio" in r else ""))
         lines.append(f"| {key} | " + " | ".join(cells) + " |")
+    # issue 26: decision-to-decision spread, the slowest of 40 consecutive decisions over the fastest
+    for key in res["configurations"][confs[0]]:
+        if "spread" in res["configurations"][confs[0]][key] and key.startswith("vector B=1024 "):
+            cells = [f"{res['configurations'][c][key]['spread']:.2f}" + (
+                f" (old {res['configurations'][c][key]['spread_old']:.2f})" if "spread_old" in res["configurations"][c][key] else "")
+                for c in confs]
+            lines.append(f"| {key}: max/min of 40 decisions | " + " | ".join(cells) + " |")
+    ms = res.get("machine_spread")
+    if ms:
+        lines.append("| the machine: max/min of 40 runs of a fixed numpy workload | "
+                     + " | ".join(f"{ms[c]['new']['decision_max_over_min']:.2f}" if c in ms else "" for c in confs) + " |")
     return "\n".join(lines)

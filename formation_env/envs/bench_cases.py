@@ -5,7 +5,8 @@ one (``python -m formation_env.envs.bench_cases CASES_JSON`` with the older chec
 A case is a dict: ``{"kind": "single", "mode": ..., "learning": ...}`` (PettingZoo parallel env,
 B = 1) or ``{"kind": "vector", "formations": B, "mode": ..., "learning": ..., "wake_update_every": k,
 "benefit": bool, "turbulence": field name, "sigma": m/s}`` (SB3 VecEnv; turbulence of that field at sigma,
-default 1 m/s). A case the code under test cannot build (an older checkout without a newer option) gives
+default 1 m/s) or ``{"kind": "machine"}`` (a fixed numpy workload: the machine's own timing spread). A
+vector case also reports the spread of 40 consecutive decisions timed one by one. A case the code under test cannot build (an older checkout without a newer option) gives
 ``{"unsupported": reason}`` instead of figures. All cases: formation_keeping, 2 Aerosondes, wake on, 10 Hz
 decisions (5 physics steps each). Result: the best of ``repeats`` timed runs after a warm-up run
 (best, not median: on a shared 2-core machine the slower runs measure the neighbours).
@@ -82,7 +83,39 @@ def _vector(case: dict, budget_s: float, repeats: int) -> dict:
     decisions, t = _calibrated(lambda: venv.step(act), budget_s, repeats)
     physics = n * decisions * 5 / t
     return {**case, "formation_physics_steps_per_s": physics, "uav_physics_steps_per_s": 2 * physics,
-            "agent_decisions_per_s": venv.num_envs * decisions / t}
+            "agent_decisions_per_s": venv.num_envs * decisions / t, **_spread(lambda: venv.step(act))}
+
+
+SPREAD_DECISIONS = 40  # issue 26: the slowest over the fastest of 40 consecutive decisions
+
+
+def _spread(call, k: int = SPREAD_DECISIONS) -> dict:
+    """Each of ``k`` consecutive calls timed alone (after the calibration's warm calls): the spread a user
+    sees from one decision to the next (min, median, max in ms and max / min)."""
+    times = []
+    for _ in range(k):
+        t0 = time.perf_counter()
+        call()
+        times.append(time.perf_counter() - t0)
+    w = np.asarray(times) * 1e3
+    return {"decision_ms_min": float(w.min()), "decision_ms_median": float(np.median(w)),
+            "decision_ms_max": float(w.max()), "decision_max_over_min": float(w.max() / w.min())}
+
+
+def _machine(case: dict, budget_s: float, repeats: int) -> dict:
+    """The machine's own spread, for scale: a fixed numpy workload (the same matrix products every call, about
+    the time of a B = 1,024 decision) timed as :func:`_spread` times decisions; nothing of formation_env runs."""
+    rng = np.random.default_rng(0)
+    a, b = rng.standard_normal((700, 700)), rng.standard_normal((700, 700))
+
+    def call():
+        c = a
+        for _ in range(int(case.get("products", 10))):
+            c = np.tanh(c @ b * 1e-2)
+        return c
+
+    call()
+    return {**case, **_spread(call)}
 
 
 def run_case(case: dict, budget_s: float = 0.5, repeats: int = 3) -> dict:
@@ -90,6 +123,8 @@ def run_case(case: dict, budget_s: float = 0.5, repeats: int = 3) -> dict:
         return _single(case, budget_s, repeats)
     if case["kind"] == "vector":
         return _vector(case, budget_s, repeats)
+    if case["kind"] == "machine":
+        return _machine(case, budget_s, repeats)
     raise ValueError(f"unknown bench case kind {case['kind']!r}")
 
 

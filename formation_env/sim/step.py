@@ -162,11 +162,22 @@ class _ThreadTuner:
 
     A thread that another process preempts holds its chunk until the scheduler returns (milliseconds),
     and the decision waits for it: on a busy machine small batches run faster serially, large ones
-    threaded. Each (kernel, B) keeps a moving average of the wall time of both settings, uses the
-    faster and re-measures the other every ``EXPLORE``-th call, so throughput follows the machine's
-    load. Results do not depend on the choice (formations are independent: bit-identical)."""
+    threaded. Each (kernel, B) keeps a moving average of the wall time of both settings and uses the
+    faster; the setting not in use is re-measured now and then, so throughput follows the machine's load.
+    Such a call costs a whole kernel call in the slower setting (at B = 1,024 on the 2-core machine a serial
+    decision takes twice a threaded one; with a fixed re-measurement every 32 calls, issue 26 measured it as
+    the slowest decision of every window of 40, 2.0-2.3x the fastest), so re-measuring is rationed:
+
+    * threaded in use: the serial setting only every ``EXPLORE_MAX`` calls. More load shows at once without
+      it: the threads' own average rises above the serial one and the tuner switches;
+    * serial in use: the threaded setting after ``EXPLORE`` calls, the interval doubling up to
+      ``EXPLORE_MAX`` each time the re-measurement confirms serial (a machine that became idle shows only
+      this way: the threaded average is stale).
+
+    Results do not depend on the choice (formations are independent: bit-identical)."""
 
     EXPLORE = 32
+    EXPLORE_MAX = 1024
     ALPHA = 0.25
 
     def __init__(self) -> None:
@@ -180,15 +191,17 @@ class _ThreadTuner:
         if threads <= 1:
             kernel(*args, 0, n)
             return
-        st = self.stats.setdefault((kernel, n, threads), [math.inf, math.inf, 0])
+        # [serial s, threaded s, calls, call of the next re-measurement, serial's re-measurement interval]
+        st = self.stats.setdefault((kernel, n, threads), [math.inf, math.inf, 0, 0, self.EXPLORE])
         st[2] += 1
         calls = st[2]
+        exploring = False
         if calls <= 5:  # warm-up: serial, threaded, serial, threaded (the first call may compile)
             use_threads = calls % 2 == 0
         else:
             use_threads = st[1] < st[0]
-            if calls % self.EXPLORE == 0:
-                use_threads = not use_threads
+            if calls == st[3]:
+                use_threads, exploring = not use_threads, True
         t0 = time.perf_counter()
         if use_threads:
             _run_parallel(kernel, n, args, threads)
@@ -197,7 +210,13 @@ class _ThreadTuner:
         dt = time.perf_counter() - t0
         if calls > 1:
             k = 1 if use_threads else 0
+            before = st[1] < st[0]
             st[k] = dt if st[k] == math.inf else (1.0 - self.ALPHA) * st[k] + self.ALPHA * dt
+            after = st[1] < st[0]
+            if calls >= 5 and (exploring or after != before or calls == 5):
+                if not after:  # serial in use: back off while re-measurements confirm it
+                    st[4] = min(2 * st[4], self.EXPLORE_MAX) if exploring and after == before else self.EXPLORE
+                st[3] = calls + (self.EXPLORE_MAX if after else st[4])
 
 
 _TUNER = _ThreadTuner()

@@ -33,3 +33,23 @@ def test_turbulence_cases_run_and_an_unknown_option_is_reported_not_raised():
                     "turbulence": "no_such_field"}, budget_s=0.0005, repeats=1)
     assert "turbulence_field" in bad["unsupported"]
     assert set(bench.TURBULENCE_CASES) <= {"von_karman", "dryden", "lanes", "independent"}
+
+
+def test_decision_spread_is_measured_and_tabled_beside_the_machines():
+    """Issue 26: each vector case times 40 consecutive decisions one by one (min <= median <= max, max/min >= 1),
+    the machine case the same for a fixed numpy workload; the table shows B = 1,024's spread and the machine's."""
+    from formation_env.envs import bench_cases
+
+    vector = run_case({"kind": "vector", "formations": 2, "mode": "setpoints", "learning": "followers"},
+                      budget_s=0.0005, repeats=1)
+    assert vector["decision_ms_min"] <= vector["decision_ms_median"] <= vector["decision_ms_max"]
+    assert np.isclose(vector["decision_max_over_min"], vector["decision_ms_max"] / vector["decision_ms_min"])
+    machine = run_case({"kind": "machine", "products": 1})
+    assert machine["decision_max_over_min"] >= 1.0 and machine["decision_ms_min"] > 0
+    assert bench_cases.SPREAD_DECISIONS == 40
+    key = "vector B=1024 setpoints learning=followers"
+    res = {"configurations": {"threads=2": {key: {"new": 1.0e5, "spread": 1.42, "spread_old": 2.31}}},
+           "machine_spread": {"threads=2": {"new": {"decision_max_over_min": 1.27}}}}
+    table = bench.format_table(res)
+    assert f"| {key}: max/min of 40 decisions | 1.42 (old 2.31) |" in table
+    assert "| the machine: max/min of 40 runs of a fixed numpy workload | 1.27 |" in table
