@@ -76,7 +76,12 @@ def _print_human(results: dict) -> None:
         print(f"  single incl. meshing   {w['single_with_meshing_us']:9.1f} us")
         for b, r in w["batched"].items():
             print(f"  batch {int(b):5d}             {r['formation_evaluations_per_s']:9.0f} formation-evaluations/s"
-                  f"  ({r['us_per_formation']:.1f} us each)")
+                  f"  ({r['us_per_formation']:.1f} us each)" + (f", {r['gflops']:.2f} GFLOP/s" if "gflops" in r else ""))
+        if "flops_per_evaluation" in w:
+            fl = w["flops_per_evaluation"]
+            print(f"  ELL GFLOP/s            {w['gflops_single']:9.2f} (single evaluation), counting {fl['total']:,} flops "
+                  f"per evaluation (AIC {fl['aic']:,}, LU {fl['lu']:,}, field {fl['field']:,}; "
+                  "formation_env.wake.bench.FLOPS)")
     envs = results.get("envs")
     if envs:
         from ..envs.bench import format_table

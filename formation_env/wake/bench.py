@@ -12,7 +12,7 @@ from ..geometry import aerosonde
 from .model import WakeModel
 from .state import FormationState
 
-__all__ = ["run_benchmarks", "aerosonde_pair_states"]
+__all__ = ["run_benchmarks", "aerosonde_pair_states", "ell_flops", "FLOPS"]
 
 THESIS_SECONDS_PER_EVALUATION = 0.072  # section 5.4.4, MATLAB on a Xeon E5410, nseg = 10
 
@@ -28,6 +28,51 @@ def aerosonde_pair_states(batch: int, seed: int = 0) -> FormationState:
     euler[..., 0] = rng.normal(0.0, 0.02, (batch, 2))
     return FormationState(pos, euler, 25.0 + rng.normal(0.0, 0.5, (batch, 2)),
                           np.radians(3.2) + rng.normal(0.0, 0.01, (batch, 2)), rng.normal(0.0, 0.005, (batch, 2)))
+
+
+# Floating-point operations of the kernels' primitives (issue 26: "report achieved GFLOP/s of the ELL with the
+# flop count it assumes"). Counted from the source of formation_env.wake.biot_savart / aic / field, every +, -,
+# *, /, sqrt and exp as one flop (the N-body convention), comparisons and min/max as none, each branch law on
+# its usual path (the overlap core's factor exactly 1: beyond ~3 r_o of the source; a cored leg's exponential
+# skipped beyond 40: the path of every point more than a few core radii away):
+FLOPS = {
+    "knot": 20,          # point_to_knots, per knot: P - X1 and P - X3 (3 each), |.|^2 (5 each), sqrt, 1/|.|
+    "branch": 33,        # branch: d x a (9), h^2 (5), cos_gamma and cos_delta (6 each), 1/(4 pi h^2) law (4), f d x a (3)
+    "branch_cored": 39,  # branch_cored: as branch, plus the distance to the segment (4) and the overlap test (3)
+    "leg": 30,           # leg with a viscous core: d x a (9), h^2 (5), cos_gamma (6), core argument (3), law (4), f (3)
+    "leg_cored": 38,     # leg_cored: leg plus |a|^2 (5) and the overlap test (3)
+    "core_radius": 13,   # core_radius: P - origin, |.|, age, C sqrt(nu tau)
+    "dot": 5,            # a branch's velocity . the panel normal
+    "to_ned": 18,        # a body point to NED (rotation and offset)
+}
+
+
+def ell_flops(model: WakeModel) -> dict:
+    """The flops of one :func:`formation_env.wake.kernels.evaluate_one` of ``model``'s formation as the kernels
+    run it (the count above, per loop of :func:`~formation_env.wake.aic.assemble_and_solve`,
+    :func:`~formation_env.wake.aic.lu_solve_inplace` and :func:`~formation_env.wake.field.field_velocity`);
+    posing and the effective-wind sums (O(panels)) are left out. An estimate of the work, not a
+    hardware count: the branch laws' rare paths (inside a core) cost a few flops more."""
+    t, f = model.template, FLOPS
+    pv, kv, sv = (np.asarray(x) for x in (t.panel_vehicle, t.knot_vehicle, t.surface_vehicle))
+    n, k = len(pv), len(kv)
+    aic = 0
+    for j in range(n):
+        own_k = int(np.sum(kv == pv[j]))
+        own_p = int(np.sum(pv == pv[j]))
+        aic += 2 * f["to_ned"] - 3 + f["knot"] * k          # control point and normal to NED, every knot's vectors
+        aic += own_k * (f["leg"] + f["dot"])                  # own trailing legs (own bound/chordwise: static)
+        aic += (k - own_k) * (f["core_radius"] + f["leg_cored"] + f["branch_cored"] + 2 * f["dot"])
+        aic += own_p * 3 + (n - own_p) * (f["branch_cored"] + f["dot"] + 4) + 5
+    lu = int(round(2 * n ** 3 / 3 + 2 * n ** 2))
+    field = 0
+    for j in range(n):  # each evaluation point, the other vehicles' surfaces
+        field += f["to_ned"]
+        for s_ in np.nonzero(sv != pv[j])[0]:
+            k0, k1 = int(t.surface_knot_start[s_]), int(t.surface_knot_start[s_ + 1])
+            field += f["core_radius"] + f["knot"] * (k1 - k0)
+            field += (k1 - k0) * (2 + f["leg_cored"] + f["branch_cored"] + 9) + (k1 - k0 - 1) * (f["branch_cored"] + 6)
+    return {"aic": aic, "lu": lu, "field": field, "total": aic + lu + field}
 
 
 def _median_time(fn, repeats: int, inner: int) -> float:
@@ -48,8 +93,11 @@ def run_benchmarks(quick: bool = False) -> dict:
     repeats = 5 if quick else 15
     t_single = _median_time(lambda: model.evaluate(single), repeats, 200 if quick else 1000)
     t_cold = _median_time(lambda: WakeModel([aerosonde(nseg=10), aerosonde(nseg=10)]).evaluate(single), 3, 20)
+    flops = ell_flops(model)
     out = {
         "case": "2 Aerosondes (wing only), 10 horseshoes each, Kurylowich core, control points",
+        "flops_per_evaluation": flops,
+        "gflops_single": flops["total"] / t_single / 1e9,
         "single_evaluation_s": t_single,
         "single_evaluation_us": t_single * 1e6,
         "single_with_meshing_us": t_cold * 1e6,
@@ -65,5 +113,6 @@ def run_benchmarks(quick: bool = False) -> dict:
             "seconds_per_call": t,
             "formation_evaluations_per_s": batch / t,
             "us_per_formation": t / batch * 1e6,
+            "gflops": flops["total"] * batch / t / 1e9,
         }
     return out

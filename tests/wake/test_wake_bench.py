@@ -1,0 +1,39 @@
+"""The ELL benchmark's flop count (issue 26: GFLOP/s reported with the count it assumes): it follows the
+kernels' loops, so it scales as they do; the benchmark's GFLOP/s is that count over the measured time.
+Speed itself is reported by `formation-env bench`, never asserted."""
+
+import pytest
+
+from formation_env.geometry import aerosonde
+from formation_env.wake import bench
+from formation_env.wake.model import WakeModel
+
+
+def _flops(n_vehicles, nseg=10):
+    return bench.ell_flops(WakeModel([aerosonde(nseg=nseg)] * n_vehicles))
+
+
+def test_flop_count_follows_the_loops():
+    f = bench.FLOPS
+    one = _flops(1)
+    # one vehicle: no other vehicle's field (its 10 evaluation points are only placed in NED), and each of its
+    # 10 control points sees its own 11 knots only
+    assert one["field"] == 10 * f["to_ned"]
+    per_point = 2 * f["to_ned"] - 3 + 11 * f["knot"] + 11 * (f["leg"] + f["dot"]) + 10 * 3 + 5
+    assert one["aic"] == 10 * per_point
+    assert one["lu"] == round(2 * 10 ** 3 / 3 + 2 * 10 ** 2)
+    two, three = _flops(2), _flops(3)
+    # the cross-vehicle terms grow with the number of pairs: the field of 3 vehicles is 3x that of 2 (6 ordered
+    # pairs against 2), and a finer lattice costs about (nseg ratio)^2 in the AIC
+    cross = two["field"] - 20 * f["to_ned"]
+    assert three["field"] - 30 * f["to_ned"] == 3 * cross
+    assert _flops(2, nseg=20)["aic"] / two["aic"] == pytest.approx(4.0, rel=0.1)
+    assert two["total"] == two["aic"] + two["lu"] + two["field"]
+
+
+def test_benchmark_reports_gflops_from_the_count(monkeypatch):
+    monkeypatch.setattr(bench, "_median_time", lambda fn, repeats, inner: 1e-3)  # no timing in a test
+    res = bench.run_benchmarks(quick=True)
+    total = res["flops_per_evaluation"]["total"]
+    assert res["gflops_single"] == pytest.approx(total / 1e-3 / 1e9)
+    assert res["batched"]["1024"]["gflops"] == pytest.approx(total * 1024 / 1e-3 / 1e9)
