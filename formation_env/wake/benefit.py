@@ -28,6 +28,7 @@ import numpy as np
 
 from .arrays import evaluate_formation
 from .aic import assemble_and_solve
+from .biot_savart import branch, leg, point_to_knots
 from .kernels import CORE_NONE, field_velocity, posed_lattice
 
 __all__ = ["induced_drag_one", "isolated_induced_drag_one", "induced_drag_saving_one", "induced_drag_saving",
@@ -75,21 +76,15 @@ def induced_drag_one(wake, gamma, pos, euler, speed, alpha, beta, out_drag, air_
         f[v, 1] += g * (vz * lx - vx * lz)
         f[v, 2] += g * (vx * ly - vy * lx)
     for v in range(nv):
-        # Body-axis force, then drag = -(force . x_wind) with x_wind the air-relative direction.
-        ca, sa = np.cos(alpha[v]), np.sin(alpha[v])
-        cb, sb = np.cos(beta[v]), np.sin(beta[v])
-        fb0 = rot[v, 0, 0] * f[v, 0] + rot[v, 0, 1] * f[v, 1] + rot[v, 0, 2] * f[v, 2]
-        fb1 = rot[v, 1, 0] * f[v, 0] + rot[v, 1, 1] * f[v, 1] + rot[v, 1, 2] * f[v, 2]
-        fb2 = rot[v, 2, 0] * f[v, 0] + rot[v, 2, 1] * f[v, 1] + rot[v, 2, 2] * f[v, 2]
-        out_drag[v] = -(fb0 * (ca * cb) + fb1 * sb + fb2 * (sa * cb))
+        out_drag[v] = _wind_axis_drag(rot[v], f[v], alpha[v], beta[v])
 
 
 @_jit
-def isolated_induced_drag_one(wake_alone, v, pos, euler, speed, alpha, beta, air_density=AIR_DENSITY_SL):
-    """Induced drag (N) vehicle ``v`` of the formation would have alone at its pose and air data:
-    the single-vehicle lattice ``wake_alone`` solved (the joint solve of ``evaluate_one``), then
-    :func:`induced_drag_one`."""
-    n = wake_alone.panel_left_knot.shape[0]
+def isolated_circulation_one(wake_alone, v, pos, euler, speed, alpha, beta, gamma_out):
+    """Circulation ``gamma_out`` (n,) of vehicle ``v`` of the formation flying alone at its pose and air
+    data: the single-vehicle lattice ``wake_alone`` posed and solved (the joint solve of ``evaluate_one``
+    without its effective-wind part, which a lone vehicle does not need: the same arithmetic, so the same
+    circulation)."""
     pos1 = np.empty((1, 3))
     eul1 = np.empty((1, 3))
     sp1 = np.empty(1)
@@ -101,20 +96,98 @@ def isolated_induced_drag_one(wake_alone, v, pos, euler, speed, alpha, beta, air
     sp1[0] = speed[v]
     al1[0] = alpha[v]
     be1[0] = beta[v]
-    gamma = np.empty(n)
+    n = wake_alone.panel_left_knot.shape[0]
     w = wake_alone
-    # the joint solve of evaluate_one (pose, AIC, circulation) without its effective-wind part,
-    # which a lone vehicle does not need: the same arithmetic, so the same circulation
     rot, vel, trail, x1, x3, origin, bound_dir, chord_dir, r1, inv1, r3, inv3 = posed_lattice(
         pos1, eul1, sp1, al1, be1, w.knot_x1_b, w.knot_x3_b, w.knot_vehicle, w.knot_surface, w.surface_origin_b,
         w.surface_vehicle, w.surface_knot_start)
     assemble_and_solve(x1, x3, bound_dir, chord_dir, trail, vel, rot, pos1, origin, sp1, w.knot_vehicle,
                        w.knot_surface, w.surface_core_scale, w.panel_left_knot, w.panel_vehicle, w.control_b, w.normal_b,
-                       w.aic_static, w.cutoff_m, w.aic_core_mode, w.kinematic_viscosity, w.overlap_core_m, np.empty((n, n)), gamma, r1,
-                       inv1, r3, inv3)
+                       w.aic_static, w.cutoff_m, w.aic_core_mode, w.kinematic_viscosity, w.overlap_core_m, np.empty((n, n)),
+                       gamma_out, r1, inv1, r3, inv3)
+    return pos1, eul1, sp1, al1, be1
+
+
+@_jit
+def isolated_induced_drag_one(wake_alone, v, pos, euler, speed, alpha, beta, air_density=AIR_DENSITY_SL):
+    """Induced drag (N) vehicle ``v`` of the formation would have alone at its pose and air data:
+    the single-vehicle lattice ``wake_alone`` solved (:func:`isolated_circulation_one`), then
+    :func:`induced_drag_one`."""
+    gamma = np.empty(wake_alone.panel_left_knot.shape[0])
+    pos1, eul1, sp1, al1, be1 = isolated_circulation_one(wake_alone, v, pos, euler, speed, alpha, beta, gamma)
     d = np.empty(1)
-    induced_drag_one(w, gamma, pos1, eul1, sp1, al1, be1, d, air_density)
+    induced_drag_one(wake_alone, gamma, pos1, eul1, sp1, al1, be1, d, air_density)
     return d[0]
+
+
+@_jit
+def _own_field_pair(px, py, pz, v, x1, x3, bound_dir, chord_dir, trail, gamma, gamma2, surface_knot_start,
+                    surface_panel_start, surface_vehicle, cutoff, r1, inv1, r3, inv3):
+    """Velocity (NED) induced at P by vehicle ``v``'s own horseshoes for two circulations at once (the
+    formation's ``gamma`` and the lone vehicle's ``gamma2``, both indexed by the formation's panels): the
+    own-horseshoe part of :func:`~formation_env.wake.field.field_velocity` (``keep_only``, the solve's law:
+    plain Biot-Savart with the ``cutoff``, no core), each branch evaluated once and added to both sums in
+    the same order and form as there, so each sum is bit for bit what a separate call gives. The lone
+    vehicle's drag needs nothing else (no other vehicle), so the saving takes it from the formation's pass
+    (issue 26: the lone vehicles' own field was half the saving's cost)."""
+    vx = 0.0
+    vy = 0.0
+    vz = 0.0
+    ux = 0.0
+    uy = 0.0
+    uz = 0.0
+    t = trail[v]
+    for s in range(surface_vehicle.shape[0]):
+        if surface_vehicle[s] != v:
+            continue
+        k0 = surface_knot_start[s]
+        k1 = surface_knot_start[s + 1]
+        p0 = surface_panel_start[s]
+        point_to_knots(px, py, pz, x1, x3, k0, k1, r1, inv1, r3, inv3)
+        for k in range(k0, k1):
+            g = 0.0
+            g2 = 0.0
+            if k < k1 - 1:
+                g += gamma[p0 + (k - k0)]
+                g2 += gamma2[p0 + (k - k0)]
+            if k > k0:
+                g -= gamma[p0 + (k - k0) - 1]
+                g2 -= gamma2[p0 + (k - k0) - 1]
+            if g != 0.0 or g2 != 0.0:
+                lx, ly, lz = leg(t[0], t[1], t[2], r3[k, 0], r3[k, 1], r3[k, 2], inv3[k], cutoff, 0.0)
+                sx, sy, sz = branch(chord_dir[k, 0], chord_dir[k, 1], chord_dir[k, 2], r3[k, 0], r3[k, 1], r3[k, 2],
+                                    inv3[k], r1[k, 0], r1[k, 1], r1[k, 2], inv1[k], cutoff)
+                if g != 0.0:
+                    vx += g * (sx - lx)
+                    vy += g * (sy - ly)
+                    vz += g * (sz - lz)
+                if g2 != 0.0:
+                    ux += g2 * (sx - lx)
+                    uy += g2 * (sy - ly)
+                    uz += g2 * (sz - lz)
+            if k < k1 - 1:
+                bx, by, bz = branch(bound_dir[k, 0], bound_dir[k, 1], bound_dir[k, 2], r1[k, 0], r1[k, 1], r1[k, 2],
+                                    inv1[k], r1[k + 1, 0], r1[k + 1, 1], r1[k + 1, 2], inv1[k + 1], cutoff)
+                gp = gamma[p0 + (k - k0)]
+                vx += gp * bx
+                vy += gp * by
+                vz += gp * bz
+                gp2 = gamma2[p0 + (k - k0)]
+                ux += gp2 * bx
+                uy += gp2 * by
+                uz += gp2 * bz
+    return vx, vy, vz, ux, uy, uz
+
+
+@_jit
+def _wind_axis_drag(rot, f, alpha, beta):
+    """Induced drag (N): minus the body-axis force ``f`` (NED, 3) along the air-relative direction."""
+    ca, sa = np.cos(alpha), np.sin(alpha)
+    cb, sb = np.cos(beta), np.sin(beta)
+    fb0 = rot[0, 0] * f[0] + rot[0, 1] * f[1] + rot[0, 2] * f[2]
+    fb1 = rot[1, 0] * f[0] + rot[1, 1] * f[1] + rot[1, 2] * f[2]
+    fb2 = rot[2, 0] * f[0] + rot[2, 1] * f[1] + rot[2, 2] * f[2]
+    return -(fb0 * (ca * cb) + fb1 * sb + fb2 * (sa * cb))
 
 
 @_jit
@@ -123,15 +196,63 @@ def induced_drag_saving_one(wake, wake_alone, pos, euler, speed, alpha, beta, ga
     """Induced-drag saving 1 - D_i(formation) / D_i(alone) of each vehicle of one formation into
     ``out_saving`` (V,) (0 where D_i(alone) is 0). ``gamma_formation`` (N,) is the formation's
     circulation at these poses (from ``evaluate_one``; nothing is solved for the formation here);
-    each vehicle's isolated drag solves ``wake_alone`` at its pose (every vehicle must be of the
-    make-up ``wake_alone`` describes); times ``wake.saving_scale`` (the span-efficiency correction, 1.0:
-    none). Equal to ``formation_benefit(...)["induced_drag_saving"]``."""
+    each vehicle's isolated circulation solves ``wake_alone`` at its pose (every vehicle must be of the
+    make-up ``wake_alone`` describes: its panels those of each vehicle of ``wake``, in order); times
+    ``wake.saving_scale`` (the span-efficiency correction, 1.0: none). Equal to
+    ``formation_benefit(...)["induced_drag_saving"]``, and bit for bit to :func:`induced_drag_one` with
+    :func:`isolated_induced_drag_one` (tested): the formation's and each lone vehicle's drag come from
+    one pass over the bound vortices, the own horseshoes' branches evaluated once for both circulations
+    (:func:`_own_field_pair`)."""
     nv = pos.shape[0]
-    d_form = np.empty(nv)
-    induced_drag_one(wake, gamma_formation, pos, euler, speed, alpha, beta, d_form, air_density)
+    n_panels = wake.panel_left_knot.shape[0]
+    n_alone = wake_alone.panel_left_knot.shape[0]
+    gamma_alone = np.empty(n_panels)
+    g1 = np.empty(n_alone)
     for v in range(nv):
-        d_alone = isolated_induced_drag_one(wake_alone, v, pos, euler, speed, alpha, beta, air_density)
-        out_saving[v] = 1.0 - d_form[v] / d_alone if abs(d_alone) > 0.0 else 0.0
+        isolated_circulation_one(wake_alone, v, pos, euler, speed, alpha, beta, g1)
+        p0 = wake.vehicle_panel_start[v]
+        for i in range(n_alone):
+            gamma_alone[p0 + i] = g1[i]
+    rot, vel, trail, x1, x3, origin, bound_dir, chord_dir, r1, inv1, r3, inv3 = posed_lattice(
+        pos, euler, speed, alpha, beta, wake.knot_x1_b, wake.knot_x3_b, wake.knot_vehicle, wake.knot_surface,
+        wake.surface_origin_b, wake.surface_vehicle, wake.surface_knot_start)
+    f = np.zeros((nv, 3))  # summed Kutta-Joukowski force per vehicle, NED: in formation
+    fa = np.zeros((nv, 3))  # and alone
+    for j in range(n_panels):
+        v = wake.panel_vehicle[j]
+        k = wake.panel_left_knot[j]
+        lx = x1[k + 1, 0] - x1[k, 0]
+        ly = x1[k + 1, 1] - x1[k, 1]
+        lz = x1[k + 1, 2] - x1[k, 2]
+        mx = 0.5 * (x1[k, 0] + x1[k + 1, 0])
+        my = 0.5 * (x1[k, 1] + x1[k + 1, 1])
+        mz = 0.5 * (x1[k, 2] + x1[k + 1, 2])
+        ox, oy, oz, ax, ay, az = _own_field_pair(mx, my, mz, v, x1, x3, bound_dir, chord_dir, trail, gamma_formation,
+                                                 gamma_alone, wake.surface_knot_start, wake.surface_panel_start,
+                                                 wake.surface_vehicle, wake.cutoff_m, r1, inv1, r3, inv3)
+        ex, ey, ez = field_velocity(mx, my, mz, v, False, x1, x3, bound_dir, chord_dir, trail, origin, speed,
+                                    gamma_formation, wake.surface_knot_start, wake.surface_panel_start,
+                                    wake.surface_vehicle, wake.surface_core_scale, wake.cutoff_m, wake.core_mode,
+                                    wake.kinematic_viscosity, wake.overlap_core_m, r1, inv1, r3, inv3)
+        vx = -vel[v, 0] + ox + ex
+        vy = -vel[v, 1] + oy + ey
+        vz = -vel[v, 2] + oz + ez
+        g = air_density * gamma_formation[j]
+        f[v, 0] += g * (vy * lz - vz * ly)
+        f[v, 1] += g * (vz * lx - vx * lz)
+        f[v, 2] += g * (vx * ly - vy * lx)
+        # alone: no other vehicle (the separate solve adds the empty others' field, 0.0, as here)
+        vx = -vel[v, 0] + ax + 0.0
+        vy = -vel[v, 1] + ay + 0.0
+        vz = -vel[v, 2] + az + 0.0
+        g = air_density * gamma_alone[j]
+        fa[v, 0] += g * (vy * lz - vz * ly)
+        fa[v, 1] += g * (vz * lx - vx * lz)
+        fa[v, 2] += g * (vx * ly - vy * lx)
+    for v in range(nv):
+        d_form = _wind_axis_drag(rot[v], f[v], alpha[v], beta[v])
+        d_alone = _wind_axis_drag(rot[v], fa[v], alpha[v], beta[v])
+        out_saving[v] = 1.0 - d_form / d_alone if abs(d_alone) > 0.0 else 0.0
         if wake.saving_scale != 1.0:  # the span-efficiency correction (WakeModel saving_scale)
             out_saving[v] *= wake.saving_scale
 

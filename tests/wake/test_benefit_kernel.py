@@ -133,3 +133,37 @@ def test_close_formation_saving_from_aircraft_state():
     assert abs(data["scenario_slot_saving"] - flat) < 0.005  # the lift-matched wing moves it by 0.002
     ref = formation_benefit(model, FormationState(pos, euler, speed, alpha, beta))["induced_drag_saving"][0]
     np.testing.assert_allclose(saving, ref, rtol=0.0, atol=TOL)
+
+
+@pytest.mark.parametrize("n, offsets", [
+    (2, [(0.0, 0.0, 0.0), (-2.0, 0.96, 0.1)]),
+    (2, [(0.0, 0.0, 0.0), (-2.0, 0.93, 0.0)]),          # on the wake plane
+    (3, [(0.0, 0.0, 0.0), (-2.0, 0.96, 0.1), (-4.0, 1.92, 0.2)]),
+    (2, [(0.0, 0.0, 0.0), (-0.3, 0.2, 0.05)]),           # overlapping wings
+], ids=["close_slot", "wake_plane", "echelon", "overlap"])
+def test_fused_saving_is_bit_for_bit_the_separate_solves(n, offsets):
+    """The saving takes the lone vehicles' drag from the formation's pass (issue 26: the own horseshoes'
+    branches evaluated once for both circulations); it must equal, bit for bit, the formation's drag
+    (induced_drag_one) over each vehicle's separately solved drag alone (isolated_induced_drag_one)."""
+    from formation_env.sim.params import wake_arrays
+    from formation_env.wake.benefit import isolated_induced_drag_one
+    from formation_env.wake.loads import isolated_model
+
+    model = _model(n)
+    state = _state(offsets, batch=6, seed=11)
+    sol = model.evaluate(state)
+    wake = wake_arrays(model, np.zeros(3))
+    v0 = model.vehicles[0]
+    alone = wake_arrays(isolated_model(v0, model.core, model.eval_points, model.rotational, model.kinematic_viscosity,
+                                       model.viscous_aic), np.zeros(3))
+    for b in range(state.batch_size):
+        args = [np.ascontiguousarray(x[b], dtype=float) for x in (state.position_ned, state.euler_rad,
+                                                                 state.airspeed_mps, state.alpha_rad, state.beta_rad)]
+        gamma = np.ascontiguousarray(sol.circulation[b])
+        fused = np.empty(n)
+        induced_drag_saving_one(wake, alone, *args, gamma, fused)
+        d_form = np.empty(n)
+        induced_drag_one(wake, gamma, *args, d_form)
+        for v in range(n):
+            d_alone = isolated_induced_drag_one(alone, v, *args)
+            assert fused[v] == 1.0 - d_form[v] / d_alone  # exactly
