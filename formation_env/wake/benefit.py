@@ -40,6 +40,26 @@ _jit = nb.njit(cache=True, error_model="numpy")
 
 
 @_jit
+def _bound_segment(x1, k):
+    """The bound vortex from knot k to k + 1 (NED, m): its vector l and its midpoint, where the
+    Kutta-Joukowski force acts."""
+    return (x1[k + 1, 0] - x1[k, 0], x1[k + 1, 1] - x1[k, 1], x1[k + 1, 2] - x1[k, 2],
+            0.5 * (x1[k, 0] + x1[k + 1, 0]), 0.5 * (x1[k, 1] + x1[k + 1, 1]), 0.5 * (x1[k, 2] + x1[k + 1, 2]))
+
+
+@_jit
+def _add_kutta_joukowski(f, v, g, wx, wy, wz, ox, oy, oz, ex, ey, ez, lx, ly, lz):
+    """Adds the Kutta-Joukowski force rho Gamma (V_rel x l) (``g`` = rho Gamma) to ``f[v]``, with V_rel =
+    -V_vehicle + o + e (``wx, wy, wz`` = V_vehicle, o the own horseshoes' velocity, e the others')."""
+    vx = -wx + ox + ex
+    vy = -wy + oy + ey
+    vz = -wz + oz + ez
+    f[v, 0] += g * (vy * lz - vz * ly)
+    f[v, 1] += g * (vz * lx - vx * lz)
+    f[v, 2] += g * (vx * ly - vy * lx)
+
+
+@_jit
 def induced_drag_one(wake, gamma, pos, euler, speed, alpha, beta, out_drag, air_density=AIR_DENSITY_SL):
     """Induced drag (N, wind axes, positive rearwards) of each of the V vehicles of one formation
     into ``out_drag`` (V,), for the circulation ``gamma`` (N,) solved at these poses
@@ -53,12 +73,7 @@ def induced_drag_one(wake, gamma, pos, euler, speed, alpha, beta, out_drag, air_
     for j in range(n_panels):
         v = wake.panel_vehicle[j]
         k = wake.panel_left_knot[j]
-        lx = x1[k + 1, 0] - x1[k, 0]
-        ly = x1[k + 1, 1] - x1[k, 1]
-        lz = x1[k + 1, 2] - x1[k, 2]
-        mx = 0.5 * (x1[k, 0] + x1[k + 1, 0])
-        my = 0.5 * (x1[k, 1] + x1[k + 1, 1])
-        mz = 0.5 * (x1[k, 2] + x1[k + 1, 2])
+        lx, ly, lz, mx, my, mz = _bound_segment(x1, k)
         # Own horseshoes: the solve's law (plain, cutoff); the others': the field law (viscous core).
         ox, oy, oz = field_velocity(mx, my, mz, v, True, x1, x3, bound_dir, chord_dir, trail, origin, speed, gamma,
                                     wake.surface_knot_start, wake.surface_panel_start, wake.surface_vehicle,
@@ -68,13 +83,8 @@ def induced_drag_one(wake, gamma, pos, euler, speed, alpha, beta, out_drag, air_
                                     wake.surface_knot_start, wake.surface_panel_start, wake.surface_vehicle,
                                     wake.surface_core_scale, wake.cutoff_m, wake.core_mode, wake.kinematic_viscosity,
                                     wake.overlap_core_m, r1, inv1, r3, inv3)
-        vx = -vel[v, 0] + ox + ex
-        vy = -vel[v, 1] + oy + ey
-        vz = -vel[v, 2] + oz + ez
-        g = air_density * gamma[j]
-        f[v, 0] += g * (vy * lz - vz * ly)
-        f[v, 1] += g * (vz * lx - vx * lz)
-        f[v, 2] += g * (vx * ly - vy * lx)
+        _add_kutta_joukowski(f, v, air_density * gamma[j], vel[v, 0], vel[v, 1], vel[v, 2], ox, oy, oz, ex, ey, ez,
+                             lx, ly, lz)
     for v in range(nv):
         out_drag[v] = _wind_axis_drag(rot[v], f[v], alpha[v], beta[v])
 
@@ -221,12 +231,7 @@ def induced_drag_saving_one(wake, wake_alone, pos, euler, speed, alpha, beta, ga
     for j in range(n_panels):
         v = wake.panel_vehicle[j]
         k = wake.panel_left_knot[j]
-        lx = x1[k + 1, 0] - x1[k, 0]
-        ly = x1[k + 1, 1] - x1[k, 1]
-        lz = x1[k + 1, 2] - x1[k, 2]
-        mx = 0.5 * (x1[k, 0] + x1[k + 1, 0])
-        my = 0.5 * (x1[k, 1] + x1[k + 1, 1])
-        mz = 0.5 * (x1[k, 2] + x1[k + 1, 2])
+        lx, ly, lz, mx, my, mz = _bound_segment(x1, k)
         ox, oy, oz, ax, ay, az = _own_field_pair(mx, my, mz, v, x1, x3, bound_dir, chord_dir, trail, gamma_formation,
                                                  gamma_alone, wake.surface_knot_start, wake.surface_panel_start,
                                                  wake.surface_vehicle, wake.cutoff_m, r1, inv1, r3, inv3)
@@ -234,21 +239,11 @@ def induced_drag_saving_one(wake, wake_alone, pos, euler, speed, alpha, beta, ga
                                     gamma_formation, wake.surface_knot_start, wake.surface_panel_start,
                                     wake.surface_vehicle, wake.surface_core_scale, wake.cutoff_m, wake.core_mode,
                                     wake.kinematic_viscosity, wake.overlap_core_m, r1, inv1, r3, inv3)
-        vx = -vel[v, 0] + ox + ex
-        vy = -vel[v, 1] + oy + ey
-        vz = -vel[v, 2] + oz + ez
-        g = air_density * gamma_formation[j]
-        f[v, 0] += g * (vy * lz - vz * ly)
-        f[v, 1] += g * (vz * lx - vx * lz)
-        f[v, 2] += g * (vx * ly - vy * lx)
+        _add_kutta_joukowski(f, v, air_density * gamma_formation[j], vel[v, 0], vel[v, 1], vel[v, 2], ox, oy, oz,
+                             ex, ey, ez, lx, ly, lz)
         # alone: no other vehicle (the separate solve adds the empty others' field, 0.0, as here)
-        vx = -vel[v, 0] + ax + 0.0
-        vy = -vel[v, 1] + ay + 0.0
-        vz = -vel[v, 2] + az + 0.0
-        g = air_density * gamma_alone[j]
-        fa[v, 0] += g * (vy * lz - vz * ly)
-        fa[v, 1] += g * (vz * lx - vx * lz)
-        fa[v, 2] += g * (vx * ly - vy * lx)
+        _add_kutta_joukowski(fa, v, air_density * gamma_alone[j], vel[v, 0], vel[v, 1], vel[v, 2], ax, ay, az,
+                             0.0, 0.0, 0.0, lx, ly, lz)
     for v in range(nv):
         d_form = _wind_axis_drag(rot[v], f[v], alpha[v], beta[v])
         d_alone = _wind_axis_drag(rot[v], fa[v], alpha[v], beta[v])
