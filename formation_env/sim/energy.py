@@ -32,7 +32,7 @@ import numpy as np
 
 from ..aircraft.kernels import aero_force_at, air_density_at
 from ..frames import quaternion_dcm_terms
-from ..wake.benefit import induced_drag_one, isolated_induced_drag_one
+from ..wake.benefit import induced_drags_one
 from ..wake.coupling import coupled_wind
 from .kernels import ell_inputs
 
@@ -78,14 +78,14 @@ def energy_account_one(wake, wake_alone, coupling, ac, x, cmd, ambient, ambient_
         for i in range(3):
             if not (math.isfinite(wind_ned[a, i]) and math.isfinite(omega_b[a, i])):
                 return
-    d_form = np.empty(nv)
-    induced_drag_one(wake, gamma, pos, euler, speed, alpha, beta, d_form, 1.0)
+    d_form, d_alone = np.empty(nv), np.empty(nv)
+    induced_drags_one(wake, wake_alone, pos, euler, speed, alpha, beta, gamma, d_form, d_alone, 1.0)
     w12 = np.zeros(12)
     vb = np.empty(3)
     for a in range(nv):
         xa = x[a]
         rho = air_density_at(-xa[12], ac.atm_T, ac.atm_P, ac.atm_rho, ac.atm_a)
-        d_alone_i = isolated_induced_drag_one(wake_alone, a, pos, euler, speed, alpha, beta, 1.0)
+        d_alone_i = d_alone[a]
         r00, r01, r02, r10, r11, r12, r20, r21, r22 = quaternion_dcm_terms(xa[6], xa[7], xa[8], xa[9])
         # unit air-relative velocity in the ambient air, body axes: u_b - R^T w_ambient
         vb[0] = xa[0] - (r00 * ambient[a, 0] + r10 * ambient[a, 1] + r20 * ambient[a, 2])

@@ -38,7 +38,8 @@ def aerosonde_pair_states(batch: int, seed: int = 0) -> FormationState:
 FLOPS = {
     "knot": 20,          # point_to_knots, per knot: P - X1 and P - X3 (3 each), |.|^2 (5 each), sqrt, 1/|.|
     "branch": 33,        # branch: d x a (9), h^2 (5), cos_gamma and cos_delta (6 each), 1/(4 pi h^2) law (4), f d x a (3)
-    "branch_cored": 39,  # branch_cored: as branch, plus the distance to the segment (4) and the overlap test (3)
+    "branch_cored": 39,  # branch_cored: d x a (9), h^2 (5), d.a and d.b (5 each), distance to the segment (4),
+    #                      overlap test (3), law (5), f d x a (3)
     "leg": 30,           # leg with a viscous core: d x a (9), h^2 (5), cos_gamma (6), core argument (3), law (4), f (3)
     "leg_cored": 38,     # leg_cored: leg plus |a|^2 (5) and the overlap test (3)
     "core_radius": 13,   # core_radius: P - origin, |.|, age, C sqrt(nu tau)

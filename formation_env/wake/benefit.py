@@ -31,8 +31,8 @@ from .aic import assemble_and_solve
 from .biot_savart import branch, leg, point_to_knots
 from .kernels import CORE_NONE, field_velocity, posed_lattice
 
-__all__ = ["induced_drag_one", "isolated_induced_drag_one", "induced_drag_saving_one", "induced_drag_saving",
-           "AIR_DENSITY_SL"]
+__all__ = ["induced_drag_one", "isolated_induced_drag_one", "induced_drags_one", "induced_drag_saving_one",
+           "induced_drag_saving", "AIR_DENSITY_SL"]
 
 AIR_DENSITY_SL = 1.225  # kg/m^3 (as formation_env.wake.loads.AIR_DENSITY_SL)
 
@@ -201,21 +201,22 @@ def _wind_axis_drag(rot, f, alpha, beta):
 
 
 @_jit
-def induced_drag_saving_one(wake, wake_alone, pos, euler, speed, alpha, beta, gamma_formation, out_saving,
-                            air_density=AIR_DENSITY_SL):
-    """Induced-drag saving 1 - D_i(formation) / D_i(alone) of each vehicle of one formation into
-    ``out_saving`` (V,) (0 where D_i(alone) is 0). ``gamma_formation`` (N,) is the formation's
-    circulation at these poses (from ``evaluate_one``; nothing is solved for the formation here);
-    each vehicle's isolated circulation solves ``wake_alone`` at its pose (every vehicle must be of the
-    make-up ``wake_alone`` describes: its panels those of each vehicle of ``wake``, in order); times
-    ``wake.saving_scale`` (the span-efficiency correction, 1.0: none). Equal to
-    ``formation_benefit(...)["induced_drag_saving"]``, and bit for bit to :func:`induced_drag_one` with
-    :func:`isolated_induced_drag_one` (tested): the formation's and each lone vehicle's drag come from
-    one pass over the bound vortices, the own horseshoes' branches evaluated once for both circulations
-    (:func:`_own_field_pair`)."""
+def induced_drags_one(wake, wake_alone, pos, euler, speed, alpha, beta, gamma_formation, out_formation, out_alone,
+                      air_density=AIR_DENSITY_SL):
+    """Induced drag (N, wind axes) of each of the V vehicles of one formation in formation (``out_formation``
+    (V,), for the circulation ``gamma_formation`` (N,) solved at these poses by ``evaluate_one``) and alone at
+    the same pose and air data (``out_alone`` (V,): each vehicle's circulation from ``wake_alone`` solved
+    alone, :func:`isolated_circulation_one`; every vehicle must be of the make-up ``wake_alone`` describes: its
+    panels those of each vehicle of ``wake``, in order, else a ValueError). Bit for bit :func:`induced_drag_one`
+    and :func:`isolated_induced_drag_one` (tested), from one pass over the bound vortices: the own horseshoes'
+    branches evaluated once for both circulations (:func:`_own_field_pair`)."""
     nv = pos.shape[0]
     n_panels = wake.panel_left_knot.shape[0]
     n_alone = wake_alone.panel_left_knot.shape[0]
+    for v in range(nv):
+        if wake.vehicle_panel_start[v + 1] - wake.vehicle_panel_start[v] != n_alone:
+            raise ValueError("induced_drags_one: wake_alone's panel count differs from a vehicle's of the formation "
+                             "(every vehicle must be of the make-up wake_alone describes)")
     gamma_alone = np.empty(n_panels)
     g1 = np.empty(n_alone)
     for v in range(nv):
@@ -245,9 +246,24 @@ def induced_drag_saving_one(wake, wake_alone, pos, euler, speed, alpha, beta, ga
         _add_kutta_joukowski(fa, v, air_density * gamma_alone[j], vel[v, 0], vel[v, 1], vel[v, 2], ax, ay, az,
                              0.0, 0.0, 0.0, lx, ly, lz)
     for v in range(nv):
-        d_form = _wind_axis_drag(rot[v], f[v], alpha[v], beta[v])
-        d_alone = _wind_axis_drag(rot[v], fa[v], alpha[v], beta[v])
-        out_saving[v] = 1.0 - d_form / d_alone if abs(d_alone) > 0.0 else 0.0
+        out_formation[v] = _wind_axis_drag(rot[v], f[v], alpha[v], beta[v])
+        out_alone[v] = _wind_axis_drag(rot[v], fa[v], alpha[v], beta[v])
+
+
+@_jit
+def induced_drag_saving_one(wake, wake_alone, pos, euler, speed, alpha, beta, gamma_formation, out_saving,
+                            air_density=AIR_DENSITY_SL):
+    """Induced-drag saving 1 - D_i(formation) / D_i(alone) of each vehicle of one formation into
+    ``out_saving`` (V,) (0 where D_i(alone) is 0), the drags from :func:`induced_drags_one` (nothing is
+    solved for the formation here: ``gamma_formation`` (N,) is its circulation at these poses, from
+    ``evaluate_one``); times ``wake.saving_scale`` (the span-efficiency correction, 1.0: none). Equal to
+    ``formation_benefit(...)["induced_drag_saving"]``."""
+    nv = pos.shape[0]
+    d_form = np.empty(nv)
+    d_alone = np.empty(nv)
+    induced_drags_one(wake, wake_alone, pos, euler, speed, alpha, beta, gamma_formation, d_form, d_alone, air_density)
+    for v in range(nv):
+        out_saving[v] = 1.0 - d_form[v] / d_alone[v] if abs(d_alone[v]) > 0.0 else 0.0
         if wake.saving_scale != 1.0:  # the span-efficiency correction (WakeModel saving_scale)
             out_saving[v] *= wake.saving_scale
 

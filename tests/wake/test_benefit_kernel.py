@@ -146,7 +146,7 @@ def test_fused_saving_is_bit_for_bit_the_separate_solves(n, offsets):
     branches evaluated once for both circulations); it must equal, bit for bit, the formation's drag
     (induced_drag_one) over each vehicle's separately solved drag alone (isolated_induced_drag_one)."""
     from formation_env.sim.params import wake_arrays
-    from formation_env.wake.benefit import isolated_induced_drag_one
+    from formation_env.wake.benefit import induced_drags_one, isolated_induced_drag_one
     from formation_env.wake.loads import isolated_model
 
     model = _model(n)
@@ -164,6 +164,28 @@ def test_fused_saving_is_bit_for_bit_the_separate_solves(n, offsets):
         induced_drag_saving_one(wake, alone, *args, gamma, fused)
         d_form = np.empty(n)
         induced_drag_one(wake, gamma, *args, d_form)
+        both_form, both_alone = np.empty(n), np.empty(n)
+        induced_drags_one(wake, alone, *args, gamma, both_form, both_alone)
+        assert np.array_equal(both_form, d_form)
         for v in range(n):
             d_alone = isolated_induced_drag_one(alone, v, *args)
+            assert both_alone[v] == d_alone
             assert fused[v] == 1.0 - d_form[v] / d_alone  # exactly
+
+
+def test_a_lone_lattice_of_another_make_up_is_refused():
+    """induced_drags_one indexes each vehicle's lone circulation by the formation's panels: a wake_alone with
+    another panel count (another make-up) is refused, never read out of bounds."""
+    from formation_env.sim.params import wake_arrays
+    from formation_env.wake.benefit import induced_drags_one
+    from formation_env.wake.loads import isolated_model
+
+    model = _model(2)
+    state = _state([(0.0, 0.0, 0.0), (-2.0, 0.96, 0.1)], batch=1, seed=12)
+    wake = wake_arrays(model, np.zeros(3))
+    other = wake_arrays(isolated_model(aerosonde(nseg=12), model.core, model.eval_points, model.rotational,
+                                       model.kinematic_viscosity, model.viscous_aic), np.zeros(3))
+    args = [np.ascontiguousarray(x[0], dtype=float) for x in (state.position_ned, state.euler_rad,
+                                                             state.airspeed_mps, state.alpha_rad, state.beta_rad)]
+    with pytest.raises(ValueError, match="make-up"):
+        induced_drags_one(wake, other, *args, np.zeros(20), np.empty(2), np.empty(2))
