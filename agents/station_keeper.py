@@ -39,8 +39,9 @@ tracker's ``Kp_alongtrack``), with three safety terms:
   throttle is closed); inside the band nothing disturbs the vertical precision;
 * airspeed floor: slower than trim - ``speed_floor_mps`` (the brakes of an overtaking follower), the speed
   demand rises and the height demand falls ``k_stall`` (m/s, m) per m/s;
-* separation guard: once the nearest other UAV is less than ``guard_m`` ahead along the track (the slot
-  is 2 spans = 5.8 m behind) the *target* moves away from it, ``guard_lateral_m`` across the track and
+* separation guard: once the nearest other UAV ahead of and in line with the slot (lateral position within
+  ``guard_window_m`` of the slot: in a vee not the follower abeam or behind) is less than ``guard_m`` ahead along the
+  track (the slot is 2 spans = 5.8 m behind) the *target* moves away from it, ``guard_lateral_m`` across the track and
   ``guard_vertical_m`` down times ``min(depth / guard_m, 1)^2`` (depth: m inside the guard; the full shift
   once it is beside or behind), and the speed demand drops ``k_guard`` m/s per m: an overtaking follower
   passes beside and below the leader. A target shift, not added loop stiffness: a push proportional to the
@@ -122,6 +123,9 @@ class StationKeeperGains:
     # min(depth / guard_m, 1)^2 (depth: m inside the guard; the full shift once it is beside), and the speed
     # demand drops k_guard m/s per m inside the guard
     guard_m: float = 5.0
+    # ... among the UAVs ahead of the slot whose lateral position is within guard_window_m of it (N-UAV formations:
+    # 1.55 spans, between the 2-UAV slot's 0.96 span from the leader plus its excursions and a vee's 1.8 spans abeam)
+    guard_window_m: float = 4.5
     k_guard: float = 1.5
     guard_lateral_m: float = 2.0
     guard_vertical_m: float = 1.0
@@ -179,9 +183,17 @@ class StationKeeper(RowIntegrators):
         e_y, e_z = err[:, 1].copy(), err[:, 2].copy()
         if nb is not None and nb.shape[1] >= 6:
             rel = inverse_slog(nb.reshape(nb.shape[0], -1, 6)[:, :, :3], NEIGHBOUR_POSITION_SCALE_M)
-            j = np.argmin(np.linalg.norm(rel, axis=2), axis=1)
+            # only a UAV ahead of the slot and in line with it across the track can be overtaken into (in a vee
+            # not the follower abeam on the other side, 1.8 spans = 5.2 m from the slot, nor the one behind);
+            # judged about the slot, not the aircraft, so the guard's own shift never releases it (with one
+            # leader 2 spans ahead of the slot, as in close_formation, the leader is always the one guarded)
+            to_slot = rel + err[:, None, :]  # the neighbour from the slot, slot frame
+            in_line = (to_slot[:, :, 0] > 0.0) & (np.abs(to_slot[:, :, 1]) < g.guard_window_m)
+            dist = np.where(in_line, np.linalg.norm(rel, axis=2), np.inf)
+            j = np.argmin(dist, axis=1)
             near = rel[np.arange(len(j)), j]
-            depth = np.clip(g.guard_m - near[:, 0], 0.0, 2.0 * g.guard_m)
+            depth = np.where(np.isfinite(dist[np.arange(len(j)), j]), np.clip(g.guard_m - near[:, 0], 0.0, 2.0 * g.guard_m),
+                             0.0)
             ramp = np.minimum(depth / g.guard_m, 1.0) ** 2
             e_y = e_y - g.guard_lateral_m * ramp * np.where(near[:, 1] > 0, -1.0, 1.0)
             e_z = e_z - g.guard_vertical_m * ramp

@@ -148,9 +148,11 @@ def check_policy_scenario(spec: str, scenario: str, *, allow: bool) -> None:
     if not allow:
         raise ValueError(f"--policy {spec!r} was trained for {trained!r}, not --scenario {scenario!r} (use "
                          f"--scenario {trained}, or pass --allow-scenario-mismatch)")
-    size = observation_size(get_scenario(scenario).n_vehicles)
+    sc = get_scenario(scenario)
+    size = observation_size(sc.n_vehicles, sc.neighbour_count)
     if trained in scenario_names():
-        own = observation_size(get_scenario(trained).n_vehicles)
+        tr = get_scenario(trained)
+        own = observation_size(tr.n_vehicles, tr.neighbour_count)
         if own != size:
             raise ValueError(f"--policy {spec!r} was trained for {trained!r} (observations of {own}), --scenario "
                              f"{scenario!r} observes {size}: --allow-scenario-mismatch needs equal sizes")

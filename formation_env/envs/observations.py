@@ -35,7 +35,10 @@ slot_schedule               10      spans, slog, /10  b, m/s, s  the slot offset
 controller_state            7       slog 1            SI         the PID's integrators and washout state
                                                                  (agents.fcs CSTATE_NAMES; 0 when the PID is off)
 neighbours                  6(V-1)  slog 3 m, 1 m/s   m, m/s     each other UAV (index order): relative position, then
-                                                                 relative velocity, in the agent's slot frame
+                            or 6k                                relative velocity, in the agent's slot frame; with
+                                                                 ``neighbour_count`` k: the k UAVs whose slots are
+                                                                 nearest the agent's, nearest first (a missing one:
+                                                                 1 km behind, same velocity)
 ==========================  ======  ================  =========  ==================================================
 """
 
@@ -63,10 +66,10 @@ def slog(x, scale):
     return np.sign(x) * np.log1p(np.abs(x) / scale)
 
 
-def to_dict(vector: np.ndarray, n_vehicles: int) -> dict[str, np.ndarray]:
-    """Split one agent's flat observation into the named groups."""
+def to_dict(vector: np.ndarray, n_vehicles: int, neighbour_count: int | None = None) -> dict[str, np.ndarray]:
+    """Split one agent's flat observation into the named groups (``neighbour_count`` as the env's)."""
     out, k = {}, 0
-    for name, size in group_sizes(n_vehicles).items():
+    for name, size in group_sizes(n_vehicles, neighbour_count).items():
         if size:
             out[name] = vector[..., k:k + size]
         k += size

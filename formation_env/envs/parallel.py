@@ -23,7 +23,7 @@ from pettingzoo import ParallelEnv
 from ..sim import Simulation
 from ..tasks import make_config
 from .config import EnvConfig
-from .observations import OBS_CLIP, group_sizes, observation_size, to_dict
+from .observations import OBS_CLIP, group_sizes, to_dict
 
 __all__ = ["FormationParallelEnv", "make_config", "check_action", "reset_options", "IGNORED_RESET_OPTIONS"]
 
@@ -89,12 +89,12 @@ class FormationParallelEnv(ParallelEnv):
         self.agents: list[str] = []
         if self.config.obs_mode == "dict":
             self._obs_space = spaces.Dict({k: spaces.Box(-OBS_CLIP, OBS_CLIP, (s,), dtype=np.float32)
-                                           for k, s in group_sizes(n).items() if s})
+                                           for k, s in group_sizes(n, self.sim.neighbour_count).items() if s})
         else:
-            self._obs_space = spaces.Box(-OBS_CLIP, OBS_CLIP, (observation_size(n),), dtype=np.float32)
+            self._obs_space = spaces.Box(-OBS_CLIP, OBS_CLIP, (self.sim.obs_size,), dtype=np.float32)
         self._act_space = spaces.Box(-1.0, 1.0, (4,), dtype=np.float32)
         # centralised critics: ``state()`` is every UAV's observation vector, concatenated in index order
-        self.state_space = spaces.Box(-OBS_CLIP, OBS_CLIP, (n * observation_size(n),), dtype=np.float32)
+        self.state_space = spaces.Box(-OBS_CLIP, OBS_CLIP, (n * self.sim.obs_size,), dtype=np.float32)
         self._entropy = np.random.SeedSequence()
         self._renderer = None
         self._was_reset = False
@@ -189,7 +189,7 @@ class FormationParallelEnv(ParallelEnv):
     def _observations(self) -> dict:
         allobs = self.sim.output.observation[0].astype(np.float32)
         n = self.sim.n_vehicles
-        return {a: to_dict(allobs[i], n) if self.config.obs_mode == "dict" else allobs[i] for a, i in self._index.items()}
+        return {a: to_dict(allobs[i], n, self.sim.neighbour_count) if self.config.obs_mode == "dict" else allobs[i] for a, i in self._index.items()}
 
     def _infos(self) -> dict:
         per_vehicle = self.sim.infos(0)

@@ -114,6 +114,9 @@ class Scenario:
     # how the ELL's wake reaches the 6-DOF unless EnvConfig.wake_coupling says otherwise
     # (formation_env.wake.coupling.COUPLINGS): the thesis's "effective_wind", or "load_weighted" (the energy tasks)
     wake_coupling: str = "effective_wind"
+    # the neighbours an agent observes unless EnvConfig.neighbour_count says otherwise: 0 every other UAV in
+    # index order (the observation grows with the formation); k the k nearest by slot (one size for any formation)
+    neighbour_count: int = 0
 
     def __post_init__(self) -> None:
         if not self.name or not isinstance(self.name, str):
@@ -126,6 +129,9 @@ class Scenario:
 
         if self.wake_coupling not in COUPLINGS:
             raise ValueError(f"Scenario.wake_coupling must be one of {tuple(COUPLINGS)}, got {self.wake_coupling!r}")
+        if isinstance(self.neighbour_count, bool) or not isinstance(self.neighbour_count, int) or not 0 <= self.neighbour_count <= 64:
+            raise ValueError(f"Scenario.neighbour_count must be an integer in 0..64 (0: every other UAV), got "
+                             f"{self.neighbour_count!r}")
         if self.slot_frame not in ("leader_demand", "leader_track"):
             raise ValueError(f"Scenario.slot_frame must be 'leader_demand' or 'leader_track', got {self.slot_frame!r}")
         if not all(isinstance(s, SlotSchedule) for s in self.slots):

@@ -284,6 +284,11 @@ class EnvConfig:
         load-weighted wind: the 6-DOF's lift, drag and rolling-moment increments are the ELL's); None (default):
         the scenario's (``load_weighted`` in the energy tasks close_formation and wake_surfing, the thesis's
         elsewhere).
+    neighbour_count: the other UAVs each agent observes (the ``neighbours`` group): 0 every other UAV in index
+        order (6 (V - 1) values: the size grows with the formation); k >= 1 the k whose slots are nearest the
+        agent's, nearest first (6 k values whatever the formation's size, so one policy flies an echelon of 3,
+        a vee of 5 and a vee of 9; a neighbour the formation lacks reads as a UAV 1 km behind); None (default):
+        the scenario's (2 in the N-UAV close formations echelon3, vee5, vee9; 0 elsewhere).
     """
 
     scenario: object = "formation_keeping"  # a scenario name or a formation_env.scenarios.Scenario
@@ -298,6 +303,7 @@ class EnvConfig:
     wake_update_every: int = 1
     turbulence_field: str = "von_karman"
     wake_coupling: str | None = None
+    neighbour_count: int | None = None
     reward: RewardWeights = field(default_factory=RewardWeights)
     randomisation: Randomisation = field(default_factory=Randomisation)
 
@@ -346,6 +352,12 @@ class EnvConfig:
             if not isinstance(self.wake_coupling, str) or self.wake_coupling not in COUPLINGS:
                 raise ValueError(f"EnvConfig: wake_coupling must be None or one of {tuple(COUPLINGS)}, "
                                  f"got {self.wake_coupling!r}")
+        if self.neighbour_count is not None:
+            k = self.neighbour_count
+            if isinstance(k, (bool, np.bool_)) or not isinstance(k, (int, np.integer)) or not 0 <= k <= 64:
+                raise ValueError(f"EnvConfig: neighbour_count must be None (the scenario's), 0 (every other UAV) or an "
+                                 f"integer in 1..64, got {k!r}")
+            object.__setattr__(self, "neighbour_count", int(k))
         if not isinstance(self.compute_benefit, (bool, np.bool_)):
             raise ValueError(f"EnvConfig: compute_benefit must be True or False, got {self.compute_benefit!r}")
         object.__setattr__(self, "compute_benefit", bool(self.compute_benefit))

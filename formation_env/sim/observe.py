@@ -35,6 +35,7 @@ CONTROLLER_STATE_SCALE = 1.0
 REWARD_TERMS = ("slot", "progress", "separation", "effort", "rate", "benefit", "collision", "crash", "box")
 _ERROR_CAP_M = 5000.0  # beyond any reachable distance: only bounds a diverged UAV's reward
 _TERMINAL_ERROR_CAP_M = 100.0
+ABSENT_NEIGHBOUR_M = 1000.0  # where an observed neighbour the formation lacks reads (m behind, same velocity)
 BOX_DEPTH_CAP_SCALES = 5.0  # the box cost's depth (in box_scale units) stops growing here
 
 
@@ -55,10 +56,12 @@ def signed_log(x, scale):
 
 @_jit
 def observe_formation(x, induced, omega, amb, pd, vd, prev, schedule, cstate, trim_airspeed, altitude, air_params,
-                      vel, chi, out):
+                      vel, chi, out, neighbour_count=0):
     """Observation rows (V, D) of one formation into ``out``. x (V, 16); induced, amb (V, 3) NED m/s;
     omega (V, 3) body rad/s; pd, vd (V, 3) demands; prev (V, 4); schedule (V, 10); cstate (V, 7);
-    vel (V, 3), chi (V,) scratch."""
+    vel (V, 3), chi (V,) scratch. ``neighbour_count`` 0: the neighbours group holds every other UAV in
+    index order; k > 0: the k UAVs whose demanded positions (slots) are nearest the agent's, nearest first
+    (ties by index), and :data:`ABSENT_NEIGHBOUR_M` behind for each of the k that the formation lacks."""
     nv = x.shape[0]
     wind = np.zeros(12)
     for a in range(nv):
@@ -118,8 +121,14 @@ def observe_formation(x, induced, omega, amb, pd, vd, prev, schedule, cstate, tr
         for m in range(CONTROLLER_STATE_SIZE):
             o[k + m] = signed_log(cstate[a, m], CONTROLLER_STATE_SCALE)
         k += CONTROLLER_STATE_SIZE
-        for j in range(nv):
-            if j == a:
+        m_n = nv - 1 if neighbour_count <= 0 else neighbour_count
+        for m in range(m_n):
+            j = _neighbour(pd, a, m, neighbour_count)
+            if j < 0:  # fewer UAVs than the policy observes: a far one behind, at the agent's velocity
+                o[k] = signed_log(-ABSENT_NEIGHBOUR_M, NEIGHBOUR_POSITION_SCALE_M)
+                for q in range(1, 6):
+                    o[k + q] = 0.0
+                k += 6
                 continue
             dx, dy, dz = x[j, POS_N] - xa[POS_N], x[j, POS_E] - xa[POS_E], x[j, POS_D] - xa[POS_D]
             tx, ty = ned_to_track_xy(c, s, dx, dy)
@@ -134,6 +143,34 @@ def observe_formation(x, induced, omega, amb, pd, vd, prev, schedule, cstate, tr
             k += 6
         for k in range(o.shape[0]):
             o[k] = _clean(o[k])
+
+
+@_jit
+def _neighbour(pd, a, m, neighbour_count):
+    """The UAV in place ``m`` of agent ``a``'s neighbours (-1: none): with ``neighbour_count`` 0 the m-th other
+    UAV by index; else the m-th nearest by demanded position (slot) to the agent's, ties by index (the order
+    is the slots', so it holds while the UAVs move about them)."""
+    nv = pd.shape[0]
+    if neighbour_count <= 0:
+        return m if m < a else m + 1
+    if m >= nv - 1:
+        return -1
+    # selection by rank: j is in place m when exactly m others come before it (nearer, or as near with a
+    # lower index); V is small (<= 9 in the tasks), so O(V^2) per place is cheaper than sorting
+    for j in range(nv):
+        if j == a:
+            continue
+        dj = (pd[j, 0] - pd[a, 0]) ** 2 + (pd[j, 1] - pd[a, 1]) ** 2 + (pd[j, 2] - pd[a, 2]) ** 2
+        before = 0
+        for i in range(nv):
+            if i == a or i == j:
+                continue
+            di = (pd[i, 0] - pd[a, 0]) ** 2 + (pd[i, 1] - pd[a, 1]) ** 2 + (pd[i, 2] - pd[a, 2]) ** 2
+            if di < dj or (di == dj and i < j):
+                before += 1
+        if before == m:
+            return j
+    return -1
 
 
 @_jit
@@ -211,14 +248,17 @@ def reward_formation(w, error, previous_error, action, previous_action, saving, 
         out[a, 8] = -w.box * (1.0 + _huber(depth_scales)) if box_depth[a] > 0.0 else 0.0
 
 
-def group_sizes(n_vehicles: int) -> dict[str, int]:
-    """Size of each observation group (formation_env.envs.observations documents them), for V UAVs."""
+def group_sizes(n_vehicles: int, neighbour_count: int | None = None) -> dict[str, int]:
+    """Size of each observation group (formation_env.envs.observations documents them), for V UAVs
+    (``neighbour_count`` k: k neighbours observed, whatever V)."""
+    n = n_vehicles - 1 if not neighbour_count else int(neighbour_count)
     return {"air_data": 3, "attitude": 3, "rates": 3, "altitude": 1, "slot_position_error": 3,
             "slot_velocity_error": 3, "induced_wind": 3, "induced_rotation": 3, "ambient_wind": 3, "engine": 1,
             "previous_action": 4, "slot_schedule": SCHEDULE_SIZE, "controller_state": CONTROLLER_STATE_SIZE,
-            "neighbours": 6 * (n_vehicles - 1)}
+            "neighbours": 6 * n}
 
 
-def observation_size(n_vehicles: int) -> int:
-    """Length D of one UAV's flat observation vector in a formation of V UAVs."""
-    return sum(group_sizes(n_vehicles).values())
+def observation_size(n_vehicles: int, neighbour_count: int | None = None) -> int:
+    """Length D of one UAV's flat observation vector in a formation of V UAVs (with ``neighbour_count`` k:
+    the same as in a formation of k + 1 UAVs observing all, whatever V)."""
+    return sum(group_sizes(n_vehicles, neighbour_count).values())

@@ -113,6 +113,8 @@ class Simulation:
         self.duration_s = sc.duration_s if config.duration_s is None else config.duration_s
         self.n_steps = int(round(self.duration_s / self.dt))
         self.wake = sc.wake_default if config.wake is None else config.wake
+        # the neighbours each agent observes (0: every other UAV; k: the k nearest by slot)
+        self.neighbour_count = sc.neighbour_count if config.neighbour_count is None else config.neighbour_count
         self.trim = trim(sc.airspeed_mps, sc.altitude_m)
         fc = PIDFlightControl.from_trim(self.trim, dt=sc.dt).config
         self.surface_limit_rad = float(fc.surface_limit_rad)
@@ -136,10 +138,10 @@ class Simulation:
             wake_alone=wake_arrays(alone, self.wing_origin_body), scenario=scenario_arrays(sc, rnd.any_manoeuvre),
             fcs=fcs_params(fc, sc.dt), action=self._action_params(config), reward=self._reward_params(config),
             field=turbulence_params(sc, sigma, config.turbulence_field), trim_airspeed_mps=float(sc.airspeed_mps),
-            coupling=coupling_arrays(lattice, self.wake_coupling, AEROSONDE))
+            coupling=coupling_arrays(lattice, self.wake_coupling, AEROSONDE), neighbour_count=self.neighbour_count)
         self.state = init_state(self.batch_size, v, lattice.n_panels, self.params.field)
-        self.output: StepOutput = init_output(self.batch_size, v, observation_size(v))
-        self.obs_size = observation_size(v)
+        self.output: StepOutput = init_output(self.batch_size, v, observation_size(v, self.neighbour_count))
+        self.obs_size = observation_size(v, self.neighbour_count)
         self.info = InfoArrays(self)
         self._actions = np.zeros((self.batch_size, v, 4))
         self._reset_once = np.zeros(self.batch_size, dtype=bool)

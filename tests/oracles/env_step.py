@@ -34,8 +34,10 @@ def _to_track(vec, chi):
 
 def build_observations_reference(state, induced_ned, omega_body, ambient_ned, turbulence_body, position_demand,
                                  velocity_demand, previous_action, schedule, controller_state, trim_airspeed,
-                                 scenario_altitude) -> np.ndarray:
-    """The same observations in plain numpy (the readable definition; tests hold the compiled one to it)."""
+                                 scenario_altitude, neighbour_count: int = 0) -> np.ndarray:
+    """The same observations in plain numpy (the readable definition; tests hold the compiled one to it).
+    ``neighbour_count`` k > 0: the k others whose demanded positions are nearest the agent's (a stable sort:
+    ties by index), a missing one 1 km behind at the agent's velocity."""
     b, v = state.shape[:2]
     flat = state.reshape(b * v, N_STATES)
     with np.errstate(all="ignore"):
@@ -63,13 +65,21 @@ def build_observations_reference(state, induced_ned, omega_body, ambient_ned, tu
             schedule,
             slog(controller_state, CONTROLLER_STATE_SCALE),
         ]
-        if v > 1:
-            neigh = np.empty((b, v, 6 * (v - 1)))
-            for i in range(v):
-                others = [j for j in range(v) if j != i]
-                rel_p = slog(_to_track(pos[:, others] - pos[:, i:i + 1], chi[:, i:i + 1]), NEIGHBOUR_POSITION_SCALE_M)
-                rel_v = slog(_to_track(vel[:, others] - vel[:, i:i + 1], chi[:, i:i + 1]), VELOCITY_SCALE_MPS)
-                neigh[:, i] = np.concatenate([rel_p, rel_v], axis=-1).reshape(b, -1)
+        k = v - 1 if neighbour_count == 0 else neighbour_count
+        if k > 0:
+            neigh = np.empty((b, v, 6 * k))
+            for f in range(b):
+                for i in range(v):
+                    others = [j for j in range(v) if j != i]
+                    if neighbour_count:
+                        d = np.sum((position_demand[f, others] - position_demand[f, i]) ** 2, axis=-1)
+                        others = [others[q] for q in np.argsort(d, kind="stable")][:k]
+                    rel_p = slog(_to_track(pos[f, others] - pos[f, i], chi[f, i]), NEIGHBOUR_POSITION_SCALE_M)
+                    rel_v = slog(_to_track(vel[f, others] - vel[f, i], chi[f, i]), VELOCITY_SCALE_MPS)
+                    rows = np.concatenate([rel_p, rel_v], axis=-1)
+                    absent = np.zeros((k - len(others), 6))
+                    absent[:, 0] = slog(-1000.0, NEIGHBOUR_POSITION_SCALE_M)
+                    neigh[f, i] = np.concatenate([rows, absent]).reshape(-1)
             parts.append(neigh)
         obs = np.concatenate(parts, axis=-1)
     obs = np.nan_to_num(obs, nan=0.0, posinf=OBS_CLIP, neginf=-OBS_CLIP)

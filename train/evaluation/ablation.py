@@ -37,10 +37,11 @@ def ablation_name(policy_name: str, groups: Sequence[str]) -> str:
     return f"{policy_name}-without-{'+'.join(groups)}"
 
 
-def ablated(policy: EvalPolicy, groups: Sequence[str], n_vehicles: int) -> EvalPolicy:
-    """A copy of ``policy`` whose observation has ``groups`` zeroed (formation of ``n_vehicles`` UAVs)."""
+def ablated(policy: EvalPolicy, groups: Sequence[str], n_vehicles: int, neighbour_count: int | None = None) -> EvalPolicy:
+    """A copy of ``policy`` whose observation has ``groups`` zeroed (formation of ``n_vehicles`` UAVs observing
+    ``neighbour_count`` neighbours, as the env's option)."""
     groups = parse_ablation(groups)
-    sizes = group_sizes(n_vehicles)
+    sizes = group_sizes(n_vehicles, neighbour_count)
     mask, k = [], 0
     for name, size in sizes.items():
         if name in groups:

@@ -70,6 +70,18 @@ def reference_saving(scenario_name: str) -> float | None:
     return None if task is None else task.optimum_saving()
 
 
+def reference_savings(scenario_name: str) -> np.ndarray | None:
+    """Each follower's saving at the reference optimum (an N-UAV task's joint optimum: its reference's
+    ``optimum_savings()``), each follower's saving counted up to its own; None where the reference has one
+    optimum for every follower (then the scalar :func:`reference_saving` caps them all)."""
+    from formation_env.tasks import task_for_scenario
+
+    task = task_for_scenario(scenario_name)
+    ref = None if task is None else task.reference
+    fn = getattr(ref, "optimum_savings", None)
+    return None if fn is None else np.asarray(fn(), dtype=float)
+
+
 def _moving_slot(scenario) -> bool:
     return any(len(s.keyframes) > 1 for s in scenario.slots)
 
@@ -85,7 +97,7 @@ class _EpisodeSeries(Recorder):
         self.agents = list(sim.agent_indices)
         b, a_n = sim.batch_size, len(self.agents)
         self.series = {k: [] for k in ("t", "err", "trk", "sep", "act", "cmd", "saving", "final_err", "box", "ell",
-                                       "sixdof")}
+                                       "sixdof", "formation")}
         self.energy = sim.wake_model is not None  # the energy account (formation_env.sim.energy) needs the wake
         self.returns = np.zeros(b)
         self.fuel0 = sim.aircraft[:, :, 13].copy()
@@ -114,6 +126,13 @@ class _EpisodeSeries(Recorder):
             acc = out.info.energy_account[:, agents]
             for key, col in (("ell", "drag_saving_pct_ell"), ("sixdof", "drag_saving_pct_6dof")):
                 series[key].append(np.where(alive[:, None], acc[..., ENERGY_COLUMNS.index(col)], np.nan))
+            if sim.benefit_enabled:  # the formation's induced-drag saving: every UAV's, the leader's included,
+                # against every UAV alone, 1 - sum D_i(formation) / sum D_i(alone) (the ELL's newtons)
+                every = out.info.energy_account
+                cut = every[..., ENERGY_COLUMNS.index("ell_saving_n")].sum(axis=1)
+                alone = every[..., ENERGY_COLUMNS.index("ell_induced_alone_n")].sum(axis=1)
+                with np.errstate(all="ignore"):
+                    series["formation"].append(np.where(alive & (alone > 0), cut / alone, np.nan))
         if self.moving:
             fe = np.full((b, a_n), np.nan)
             vd0 = sim.velocity_demand[:, 0]
@@ -150,6 +169,10 @@ def run_episodes(policy, config, seeds: Sequence[int], *, keep_series: bool = Fa
     series, returns, fuel0, fuel_end, moving = rec.series, rec.returns, rec.fuel0, rec.fuel_end, rec.moving
     end_step, collided, crashed = res.decisions, res.collided, res.crashed
     optimum = reference_saving(sc.name)
+    optima = reference_savings(sc.name) if optimum is not None else None
+    if optima is not None and optima.shape != (a_n,):
+        optima = None  # learners other than every follower: the scalar optimum caps them
+    cap = optimum if optima is None else optima[None, :]
     trim = sim.trim.controls[0, :4]
     t = np.asarray(series["t"])
     err = np.stack(series["err"])          # (T, B, A)
@@ -160,6 +183,7 @@ def run_episodes(policy, config, seeds: Sequence[int], *, keep_series: bool = Fa
     saving = np.stack(series["saving"])
     box = np.stack(series["box"])
     energy = {key: np.stack(series[key]) for key in ("ell", "sixdof")} if rec.energy else {}
+    formation = np.stack(series["formation"]) if series["formation"] else None  # (T, B)
     final_err = np.stack(series["final_err"]) if moving else None
     schedule_start = sc.slots[0].keyframes[1][0] if moving else 0.0
     out = []
@@ -199,9 +223,14 @@ def run_episodes(policy, config, seeds: Sequence[int], *, keep_series: bool = Fa
                 # each decision's saving counted up to the optimum of the task's allowed region: above it the
                 # follower is inside the band where the lattice overstates the saving (issue 23 part 6), so no
                 # excursion into it can make up for time off the slot; the uncapped ratio is reported beside it
-                capped = np.minimum(saving[:n, i], optimum)
+                capped = np.minimum(saving[:n, i], cap)
                 m["harvest_ratio"] = float(np.sum(capped) / ((n + missing) * a_n)) / optimum
                 m["harvest_ratio_uncapped"] = m["induced_drag_saving"] / optimum
+            if a_n > 1:  # each learning follower's own saving (an N-UAV task is judged follower by follower)
+                for j, v in enumerate(agents):
+                    m[f"induced_drag_saving_uav{v}"] = float(np.sum(saving[:n, i, j]) / (n + missing))
+            if formation is not None:
+                m["formation_saving"] = float(np.nansum(formation[:n, i]) / (n + missing))
         if rec.energy:  # the energy account's means over the decisions, the time not flown as no saving
             for key, name in (("ell", "drag_saving_pct_ell"), ("sixdof", "drag_saving_pct_6dof")):
                 m[name] = float(np.sum(energy[key][:n, i]) / ((n + missing) * a_n))

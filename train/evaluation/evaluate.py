@@ -22,7 +22,13 @@ fuel_saving_pct                100 (1 - follower fuel / leader fuel)
 induced_drag_saving            mean ELL induced-drag saving of the followers (with ``compute_benefit``)
 harvest_ratio                  (a task with a reference optimum) mean over the decisions of the saving
                                capped at the optimum of the task's allowed region, over that optimum (the
-                               time not flown: no saving); ``harvest_ratio_uncapped`` without the cap
+                               time not flown: no saving); ``harvest_ratio_uncapped`` without the cap; in
+                               an N-UAV task each follower's saving capped at its own saving at the joint
+                               optimum, over the followers' mean optimum
+induced_drag_saving_uav<k>     (several learning followers) follower k's own mean saving
+formation_saving               (with the wake) the formation's induced-drag saving, every UAV's (the leader's
+                               included) against every UAV alone: 1 - sum D_i(formation) / sum D_i(alone)
+                               (the ELL's newtons), mean over the decisions (the time not flown: none)
 reconfig_success               (scenarios with a moving slot) no collision or crash and every follower
                                within 1 span (2.9 m) of its final slot for the last 5 s
 reconfig_time_s                time from the start of the slot schedule until the follower is within
@@ -147,10 +153,10 @@ def evaluate(policies: Sequence[str], *, scenario: str, episodes: int = TEST_EPI
         from .ablation import ablated, parse_ablation
 
         hidden = [parse_ablation(a) for a in ablations]
-        n_vehicles = _scenario(scenario).n_vehicles
+        n_vehicles, n_observed = _scenario(scenario).n_vehicles, _scenario(scenario).neighbour_count
         for pol in [p for p in loaded if specs[p.name] not in BASELINES]:
             for hide in hidden:  # not ``groups``: that is the seed-group argument
-                copy = ablated(pol, hide, n_vehicles)
+                copy = ablated(pol, hide, n_vehicles, n_observed)
                 loaded.append(copy)
                 specs[copy.name] = specs[pol.name]
     names = [p.name for p in loaded]

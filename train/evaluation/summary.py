@@ -15,7 +15,10 @@ _MEAN_KEYS = ("return", "rms_slot_error_m", "rms_along_track_m", "rms_lateral_m"
               "time_within_1m_s", "time_within_1m_frac", "control_effort_rad", "throttle_mean", "action_rms",
               "fuel_used_kg", "leader_fuel_kg", "fuel_saving_pct", "induced_drag_saving", "harvest_ratio",
               "harvest_ratio_uncapped",
-              "drag_saving_pct_ell", "drag_saving_pct_6dof", "duration_s", "box_outside_frac", "induced_drag_saving_in_box")
+              "drag_saving_pct_ell", "drag_saving_pct_6dof", "duration_s", "box_outside_frac", "induced_drag_saving_in_box",
+              "formation_saving")
+#: per-follower keys of an N-UAV task (``induced_drag_saving_uav<k>``): means and intervals like the saving's
+_PER_UAV_PREFIX = "induced_drag_saving_uav"
 
 
 def summarise(episodes: list[dict], *, n_boot: int = N_BOOT, seed: int = 0) -> dict:
@@ -44,7 +47,10 @@ def summarise(episodes: list[dict], *, n_boot: int = N_BOOT, seed: int = 0) -> d
         longest = np.array([e["box_outside_longest_s"] for e in episodes], dtype=float)
         s["box_outside_longest_s_worst"] = float(np.max(longest))
         s["box_outside_over_1s"] = int(np.sum(longest > 1.0))
-    for key in ("induced_drag_saving", "harvest_ratio", "rms_lateral_m", "rms_vertical_m"):
+    per_uav = sorted((k for k in episodes[0] if k.startswith(_PER_UAV_PREFIX)), key=lambda k: int(k[len(_PER_UAV_PREFIX):]))
+    for key in per_uav:
+        s[key] = float(np.mean([e[key] for e in episodes]))
+    for key in ("induced_drag_saving", "harvest_ratio", "rms_lateral_m", "rms_vertical_m", "formation_saving", *per_uav):
         if key in episodes[0]:
             vals = np.array([e[key] for e in episodes], dtype=float)
             s[f"{key}_ci"] = list(bootstrap_ci(vals, "mean", n_boot=n_boot, seed=seed))

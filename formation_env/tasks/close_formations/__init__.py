@@ -1,0 +1,72 @@
+"""Tasks ``echelon3``, ``vee5`` and ``vee9``: N-UAV close formations at their joint ELL optimum (issue 25).
+
+Every follower is a learner (``learning="followers"``, one row each) and holds its slot of the formation's
+joint induced-drag optimum (:mod:`.optimum`, ``formation_env/data/close_formations_optimum.json``): ranks 2 spans
+apart along the track, each ~0.9 span outboard of and 0.1 span below the UAV it trails (the band |z| < 0.1 b
+about a wake plane is excluded as in ``close_formation``). The ELL's loads reach the 6-DOF through the
+load-weighted coupling, as in the 2-UAV energy task. Judged against the thesis PID and ``station_keeper`` on
+every follower, by each follower's saving and the formation's (the leader included).
+"""
+
+from __future__ import annotations
+
+from ...scenarios import Scenario, SlotSchedule
+from ..base import Task, register_task
+from . import optimum as _optimum
+
+__all__ = ["SCENARIOS", "TASKS", "FormationReference"]
+
+
+class FormationReference:
+    """The reference optimum of one N-UAV task: the savings at its (rounded) joint-optimum slots in calm air.
+    ``optimum_saving()``: the followers' mean (the denominator of ``harvest_ratio``); ``optimum_savings()``: per
+    follower (each follower's saving is counted up to its own); ``formation_saving()``: every UAV's mean."""
+
+    def __init__(self, name: str) -> None:
+        self.name = name
+
+    def _entry(self) -> dict:
+        return _optimum.optimum(self.name)
+
+    def optimum_savings(self) -> tuple:
+        return tuple(float(v) for v in self._entry()["slot_savings"][1:])
+
+    def optimum_saving(self) -> float:
+        return float(self._entry()["slot_follower_saving"])
+
+    def formation_saving(self) -> float:
+        return float(self._entry()["slot_formation_saving"])
+
+    def __repr__(self) -> str:
+        return f"FormationReference({self.name!r})"
+
+
+def _scenario(name: str, description: str) -> Scenario:
+    entry = _optimum.optimum(name)
+    slots = tuple(SlotSchedule(((0.0, tuple(off)),)) for off in entry["slots_b"])
+    return Scenario(name, description, duration_s=60.0, slots=slots,
+                    notes={"formation_saving": entry["slot_formation_saving"],
+                           "follower_saving": entry["slot_follower_saving"], "z_exclusion_b": _optimum.Z_EXCLUSION_B},
+                    wake_coupling="load_weighted",
+                    # one observation for every formation size: the two UAVs whose slots are nearest (in a vee the
+                    # one ahead and the one abeam, or the one ahead and the one behind), never one the formation lacks
+                    neighbour_count=2)
+
+
+_DEFS = (
+    ("echelon3", "formation_env/Echelon3Close-v0", "right echelon of 3 at the joint ELL optimum: each follower 2 spans "
+     "behind, ~0.95 span starboard of and 0.1 span below the UAV ahead"),
+    ("vee5", "formation_env/Vee5Close-v0", "vee of 5 at the joint ELL optimum: two ranks, each follower 2 spans behind, "
+     "~0.9 span outboard of and 0.1 span below the UAV ahead on its side"),
+    ("vee9", "formation_env/Vee9Close-v0", "vee of 9 at the joint ELL optimum: four ranks, each follower 2 spans behind, "
+     "~0.9 span outboard of and 0.1 span below the UAV ahead on its side"),
+)
+
+SCENARIOS = {name: _scenario(name, desc) for name, _, desc in _DEFS}
+TASKS = {name: register_task(Task(name, SCENARIOS[name], gym_id, 1, baselines=("pid", "station_keeper"),
+                                  reference=FormationReference(name),
+                                  description=f"N-UAV close formation ({name}) at the joint ELL optimum",
+                                  # as close_formation: every follower starts a tenth of a span (std, per axis)
+                                  # off its slot, so that calm-air test episodes differ
+                                  test_randomisation={"initial_offset_m": 0.3}))
+         for name, gym_id, _ in _DEFS}
