@@ -101,25 +101,53 @@ def test_signs_and_magnitudes():
 
 
 def test_separation_guard_moves_away_from_an_overtaken_leader():
+    """Each case against the same slot error with the leader far ahead (no guard): the guard's own effect. The
+    leader's position is consistent with the slot error (the slot is 5.8 m behind, 2.8 m starboard of it)."""
     g = StationKeeper().gains
     tr, ap = TrackerGains(), AutopilotGains()
     clear = StationKeeper().act(_obs())[0]
     np.testing.assert_allclose(clear[:3], 0.0, atol=1e-6)  # on the slot, the leader 5.8 m ahead: no guard
+
+    def guarded(ahead_m, lateral_m=-2.8):  # follower ahead of its slot, leader ahead_m ahead of the follower
+        err = (5.8 - ahead_m, 0.0, 0.0)
+        a = StationKeeper().act(_obs(err=err, leader=(ahead_m, lateral_m, -0.3)))[0]
+        free = StationKeeper().act(_obs(err=err, leader=(30.0, lateral_m, -0.3)))[0]
+        return a - free
+
     # the leader only 4 m ahead and 2.8 m to port: the target moves to starboard by guard_lateral_m and down
     # by guard_vertical_m, times the ramp (depth / guard_m)^2, and the speed demand drops
-    close = StationKeeper().act(_obs(leader=(4.0, -2.8, -0.3)))[0]
+    close = guarded(4.0)
     ramp = ((g.guard_m - 4.0) / g.guard_m) ** 2
     bank_sent = (1.0 + g.k_roll) * g.kd_lateral * g.kp_lateral * g.guard_lateral_m * ramp
     assert close[1] == pytest.approx(bank_sent / (ap.Kp_heading * tr.Kp_offtrack) / 5.0, rel=1e-4)
     pitch = -(1.0 + g.k_pitch) * g.kp_vertical * g.guard_vertical_m * ramp
     assert close[2] == pytest.approx(pitch / ap.Kp_altitude / 5.0, rel=1e-4)
-    assert close[1] > 0 and close[2] > 0 and close[3] < clear[3]
+    assert close[1] > 0 and close[2] > 0 and close[3] < 0
     # mirrored: a leader to starboard pushes the demand to port (and still down)
-    port = StationKeeper().act(_obs(leader=(4.0, 2.8, -0.3)))[0]
+    port = guarded(4.0, 2.8)
     assert port[1] == pytest.approx(-close[1], rel=1e-4) and port[2] == pytest.approx(close[2], rel=1e-4)
-    # beside the leader: the full shift, further away still
-    beside = StationKeeper().act(_obs(leader=(-1.0, -2.8, -0.3)))[0]
-    assert beside[1] > close[1] and beside[2] > close[2] and beside[3] < close[3]
+    # beside the leader: the full shift, further away still (the speed demand is saturated there either way)
+    beside = guarded(-1.0)
+    assert beside[1] > close[1] and beside[2] > close[2]
+
+
+def test_separation_guard_ignores_a_follower_abeam_or_behind():
+    """In a vee the inner followers fly 1.8 spans (5.2 m) abeam of each other and the outer ones 2 spans behind:
+    neither is a UAV to brake for (the guard did, and the vee's inner followers lagged their slots by 4.7 m); the
+    leader ahead and in line still is."""
+    def act(neighbours):
+        obs = np.zeros((1, observation_size(1 + len(neighbours))))
+        k = observation_size(1)
+        obs[0, 3] = TRIM_THETA_RAD / 0.5  # trim pitch, as _obs
+        for j, rel in enumerate(neighbours):
+            obs[0, k + 6 * j:k + 6 * j + 3] = slog(np.asarray(rel, float), 3.0)
+        return StationKeeper().act(obs)[0]
+
+    leader = (5.8, -2.6, -0.3)
+    alone = act([leader])
+    np.testing.assert_allclose(act([leader, (0.3, -5.2, 0.0), (-5.8, 2.7, 0.3)]), alone, atol=1e-7)
+    # the same UAV abeam but in line with the slot (as an overtaken leader would be) is guarded
+    assert act([leader, (0.3, -2.6, 0.0)])[1] > alone[1] + 0.05
 
 
 def test_airspeed_floor_stops_the_brakes():
