@@ -1,5 +1,6 @@
 #!/usr/bin/env bash
-# The exact commands behind the committed policies in train/policies/ (issues 13, 16 and 24; the wake_surfing_random_leader
+# The exact commands behind the committed policies in train/policies/ (issues 13, 16, 24 and 25 (vee5: run without
+# NUMBA_NUM_THREADS=1, two at a time); the wake_surfing_random_leader
 # seed 0 ran with --config runs/ws24/variant.yml, whose section equals ppo.yml's wake_surfing_random_leader: the resolved
 # hyperparameters are identical): PPO, setpoints actions,
 # frozen Dryden turbulence sigma 1 m/s (wake_surfing: its task preset, train/hyperparams/ppo.yml), wake on, 3 training seeds per task, run two at a time on the
@@ -19,6 +20,7 @@ jobs_list() {
     echo "reconfiguration 2500000 $seed"
     echo "wake_surfing 2000000 $seed"
     echo "wake_surfing_random_leader 2000000 $seed"
+    echo "vee5 2000000 $seed"
   done
 }
 # ONLY="scenario:seed scenario:seed ..." runs a subset (e.g. to redo one run)
@@ -41,7 +43,7 @@ export RUNS FE
 jobs_list | selected | xargs -P 2 -L 1 bash -c 'run_one "$0" "$1" "$2"'
 [ -n "${NO_PUBLISH:-}" ] && exit 0
 
-for scenario in formation_keeping close_formation reconfiguration wake_surfing wake_surfing_random_leader; do
+for scenario in formation_keeping close_formation reconfiguration wake_surfing wake_surfing_random_leader vee5; do
   for seed in 0 1 2; do
     run="$RUNS/${scenario}_seed${seed}"
     wall=$("$PY" -c "import json,sys; print(json.load(open(sys.argv[1]))['wall_s'])" "$run/summary.json")

@@ -18,7 +18,8 @@ def _results(tmp_path):
         pols = {"a_seed0": {"summary": {"harvest_ratio": 0.9 - lv / 10, "wall_s": 3.0}, "episodes": [ep(1, 0.9), ep(2, 0.8)]},
                 "a_seed0-without-ambient_wind": {"summary": {"harvest_ratio": 0.5}, "episodes": [ep(1, 0.5), ep(2, 0.5)]},
                 "pid": {"summary": {"harvest_ratio": 0.1}, "episodes": [ep(1, 0.1), ep(2, 0.2)]}}
-        (d / "results.json").write_text(json.dumps({"turbulence_sigma_mps": lv, "seeds": [1, 2], "policies": pols,
+        (d / "results.json").write_text(json.dumps({"scenario": "close_formation", "turbulence_sigma_mps": lv,
+                                                    "seeds": [1, 2], "policies": pols,
                                                     "comparisons": {"a_seed0": {"pid": {"harvest_ratio": {"n": 2}}}}}))
     (tmp_path / "levels.json").write_text(json.dumps({"scenario": "close_formation", "levels": [0.0, 1.0]}))
     return tmp_path
@@ -43,3 +44,10 @@ def test_cli_writes_once_and_refuses_a_bad_directory(tmp_path, capsys):
     assert lr.main([str(src), str(out), "--overwrite"]) == 0
     assert lr.main([str(tmp_path), str(tmp_path / "x.json")]) == 2
     assert "no levels.json" in capsys.readouterr().err
+
+
+def test_one_level_directory_is_recorded_as_its_level(tmp_path):
+    """``formation-env evaluate --turbulence 1`` writes results.json in the directory itself: one level."""
+    rec = lr.levels_record(_results(tmp_path) / "sigma_1")
+    assert rec["levels"] == [1.0] and list(rec["by_level"]) == ["sigma_1"]
+    assert rec["by_level"]["sigma_1"] == lr.levels_record(tmp_path)["by_level"]["sigma_1"]

@@ -1,5 +1,6 @@
 """The committed record of a multi-level evaluation (``formation-env evaluate --turbulence 0 0.5 1 1.5``, whose
-output directory holds ``levels.json`` and one ``sigma_<level>/results.json`` per level): per level the
+output directory holds ``levels.json`` and one ``sigma_<level>/results.json`` per level; one level's directory, its
+``results.json``): per level the
 summaries of every policy (ablated copies included), the paired comparisons, and per-episode columns of the
 quantities close formation is judged by for the controllers themselves (harvest ratio, slot-frame RMS errors,
 smallest separation, collision, episode length: enough to recompute their intervals and paired differences).
@@ -18,7 +19,7 @@ from pathlib import Path
 __all__ = ["EPISODE_KEYS", "levels_record", "main"]
 
 EPISODE_KEYS = ("seed", "duration_s", "harvest_ratio", "rms_along_track_m", "rms_lateral_m", "rms_vertical_m",
-                "min_separation_m", "collision")
+                "min_separation_m", "collision", "formation_saving")
 
 
 def _round(v):
@@ -28,11 +29,16 @@ def _round(v):
 def levels_record(results_dir: str | Path, *, command: str | None = None) -> dict:
     """The compact record of ``results_dir`` (see the module docstring)."""
     src = Path(results_dir)
-    levels = json.loads((src / "levels.json").read_text())
+    if (src / "levels.json").is_file():
+        levels = json.loads((src / "levels.json").read_text())
+        files = {f"sigma_{lv:g}": src / f"sigma_{lv:g}" / "results.json" for lv in levels["levels"]}
+    else:  # one level (``--turbulence L``): the directory's own results.json
+        rep = json.loads((src / "results.json").read_text())
+        levels = {"scenario": rep["scenario"], "levels": [rep["turbulence_sigma_mps"]]}
+        files = {f"sigma_{rep['turbulence_sigma_mps']:g}": src / "results.json"}
     out = {"scenario": levels["scenario"], "levels": levels["levels"], "command": command, "by_level": {}}
-    for lv in levels["levels"]:
-        name = f"sigma_{lv:g}"
-        rep = json.loads((src / name / "results.json").read_text())
+    for name, path in files.items():
+        rep = json.loads(path.read_text())
         out["by_level"][name] = {
             "turbulence_sigma_mps": rep["turbulence_sigma_mps"], "turbulence_field": rep.get("turbulence_field"),
             "wake_coupling": rep.get("wake_coupling"), "seeds": [rep["seeds"][0], rep["seeds"][-1]],
@@ -57,8 +63,8 @@ def main(argv: list[str] | None = None) -> int:
     from formation_env.io import atomic_write_text
 
     src = Path(a.results_dir)
-    if not (src / "levels.json").is_file():
-        print(f"error: {src} has no levels.json (is it the --out of 'formation-env evaluate --turbulence L1 L2 ...'?)",
+    if not ((src / "levels.json").is_file() or (src / "results.json").is_file()):
+        print(f"error: {src} has no levels.json or results.json (is it the --out of 'formation-env evaluate'?)",
               file=sys.stderr)
         return 2
     try:
