@@ -1,0 +1,33 @@
+"""The committed held-out record of the vee5-trained shared PPO policies (train/policies/
+vee5_ppo_setpoints_levels.json, docs/multi_agent.md) is what the committed zips fly."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from train.evaluation.episodes import eval_env_config, run_episodes
+from train.evaluation.policy_loader import load_policy
+
+ROOT = Path(__file__).resolve().parents[2] / "train" / "policies"
+RECORD = ROOT / "vee5_ppo_setpoints_levels.json"
+
+
+@pytest.mark.skipif(not RECORD.is_file(), reason="no committed vee5 record")
+@pytest.mark.parametrize("task", ["vee5", "echelon3"])
+def test_the_committed_record_is_what_the_policy_flies(task):
+    """Two of the record's held-out sigma-1 episodes flown again with the committed zip give the recorded harvest
+    ratio and formation saving (the record rounds to 6 digits); the summary is the mean of the record's own
+    100 episodes."""
+    rec = json.loads(RECORD.read_text())["records"][task][0]["by_level"]["sigma_1"]
+    name = "vee5_ppo_setpoints_seed1"
+    cols = rec["episodes"][name]
+    pol = load_policy(str(ROOT / f"{name}.zip"))
+    eps = run_episodes(pol, eval_env_config(task, pol.action_mode, turbulence_sigma_mps=1.0), cols["seed"][:2])
+    for key in ("harvest_ratio", "formation_saving"):
+        assert [e[key] for e in eps] == pytest.approx(cols[key][:2], rel=1e-5, abs=1e-6)
+    assert len(cols["harvest_ratio"]) == 100
+    assert rec["summaries"][name]["harvest_ratio"] == pytest.approx(np.mean(cols["harvest_ratio"]), abs=1e-6)
