@@ -138,7 +138,7 @@ def test_separation_guard_ignores_a_follower_abeam_or_behind():
     def act(neighbours):
         obs = np.zeros((1, observation_size(1 + len(neighbours))))
         k = observation_size(1)
-        obs[0, 3] = TRIM_THETA_RAD / 0.5  # trim pitch, as _obs
+        obs[0, 4] = TRIM_THETA_RAD / 0.5  # trim pitch (attitude: phi, theta, psi from index 3), as _obs
         for j, rel in enumerate(neighbours):
             obs[0, k + 6 * j:k + 6 * j + 3] = slog(np.asarray(rel, float), 3.0)
         return StationKeeper().act(obs)[0]

@@ -12,7 +12,9 @@ from formation_env.rollout import Recorder
 from formation_env.sim.energy import ENERGY_COLUMNS
 from formation_env.tasks.wake_surfing.metrics import longest_run
 
-__all__ = ["eval_env_config", "run_episodes", "reference_saving", "longest_run", "SPAN_M", "SUCCESS_WINDOW_S",
+from .summary import PER_UAV_PREFIX
+
+__all__ = ["eval_env_config", "run_episodes", "reference_saving", "reference_savings", "longest_run", "SPAN_M", "SUCCESS_WINDOW_S",
            "FAILURE_SLOT_ERROR_M"]
 
 from formation_env.constants import AEROSONDE_SPAN_M as SPAN_M  # noqa: E402
@@ -228,7 +230,7 @@ def run_episodes(policy, config, seeds: Sequence[int], *, keep_series: bool = Fa
                 m["harvest_ratio_uncapped"] = m["induced_drag_saving"] / optimum
             if a_n > 1:  # each learning follower's own saving (an N-UAV task is judged follower by follower)
                 for j, v in enumerate(agents):
-                    m[f"induced_drag_saving_uav{v}"] = float(np.sum(saving[:n, i, j]) / (n + missing))
+                    m[f"{PER_UAV_PREFIX}{v}"] = float(np.sum(saving[:n, i, j]) / (n + missing))
             if formation is not None:
                 m["formation_saving"] = float(np.nansum(formation[:n, i]) / (n + missing))
         if rec.energy:  # the energy account's means over the decisions, the time not flown as no saving

@@ -8,6 +8,8 @@ from pathlib import Path
 
 import numpy as np
 
+from .summary import PER_UAV_PREFIX, per_uav_keys
+
 __all__ = ["markdown_table", "comparison_table", "groups_table"]
 
 _TABLE = (("rms_slot_error_m", "RMS slot error (m)", "{:.3f}"),
@@ -44,7 +46,7 @@ def _cell(s: dict, key: str, fmt: str) -> str:
     if v is None:
         return "-"
     if f"{key}_ci" in s and (key in ("rms_slot_error_m", "rms_lateral_m", "rms_vertical_m", "harvest_ratio",
-                                      "formation_saving") or key.startswith("induced_drag_saving_uav")):
+                                      "formation_saving") or key.startswith(PER_UAV_PREFIX)):
         lo, hi = s[f"{key}_ci"]
         return f"{_fmt(v, fmt)} [{_fmt(lo, fmt)}, {_fmt(hi, fmt)}]"
     if key in ("collisions", "crashes") and "episodes" in s:
@@ -60,12 +62,11 @@ def markdown_table(summaries: dict[str, dict]) -> str:
     the reconfiguration success as rate [95 % Wilson CI]."""
     names = list(summaries)
     lines = ["| metric (mean over episodes [95 % CI]) | " + " | ".join(names) + " |", "|---|" + "---|" * len(names)]
-    per_uav = sorted({k for s in summaries.values() for k in s if k.startswith("induced_drag_saving_uav")
-                      and not k.endswith("_ci")}, key=lambda k: int(k[len("induced_drag_saving_uav"):]))
+    per_uav = per_uav_keys({k for s in summaries.values() for k in s})
     rows = list(_TABLE)
     at = [k for k, _, _ in rows].index("harvest_ratio") + 1  # an N-UAV task: the formation's and each follower's
     rows[at:at] = [("formation_saving", "formation induced-drag saving (every UAV, ELL)", "{:.4f}")] + [
-        (k, f"induced-drag saving, uav_{k[len('induced_drag_saving_uav'):]}", "{:.4f}") for k in per_uav]
+        (k, f"induced-drag saving, uav_{k[len(PER_UAV_PREFIX):]}", "{:.4f}") for k in per_uav]
     for key, label, fmt in rows:
         if not any(key in s for s in summaries.values()):
             continue

@@ -9,7 +9,7 @@ import numpy as np
 
 from .stats import N_BOOT, bootstrap_ci, wilson_interval
 
-__all__ = ["summarise", "selection_score"]
+__all__ = ["summarise", "selection_score", "PER_UAV_PREFIX", "per_uav_keys"]
 
 _MEAN_KEYS = ("return", "rms_slot_error_m", "rms_along_track_m", "rms_lateral_m", "rms_vertical_m", "max_slot_error_m",
               "time_within_1m_s", "time_within_1m_frac", "control_effort_rad", "throttle_mean", "action_rms",
@@ -18,7 +18,13 @@ _MEAN_KEYS = ("return", "rms_slot_error_m", "rms_along_track_m", "rms_lateral_m"
               "drag_saving_pct_ell", "drag_saving_pct_6dof", "duration_s", "box_outside_frac", "induced_drag_saving_in_box",
               "formation_saving")
 #: per-follower keys of an N-UAV task (``induced_drag_saving_uav<k>``): means and intervals like the saving's
-_PER_UAV_PREFIX = "induced_drag_saving_uav"
+PER_UAV_PREFIX = "induced_drag_saving_uav"
+
+
+def per_uav_keys(keys) -> list[str]:
+    """The per-follower saving keys among ``keys`` (intervals left out), in UAV order."""
+    own = {k for k in keys if k.startswith(PER_UAV_PREFIX) and k[len(PER_UAV_PREFIX):].isdigit()}
+    return sorted(own, key=lambda k: int(k[len(PER_UAV_PREFIX):]))
 
 
 def summarise(episodes: list[dict], *, n_boot: int = N_BOOT, seed: int = 0) -> dict:
@@ -47,7 +53,7 @@ def summarise(episodes: list[dict], *, n_boot: int = N_BOOT, seed: int = 0) -> d
         longest = np.array([e["box_outside_longest_s"] for e in episodes], dtype=float)
         s["box_outside_longest_s_worst"] = float(np.max(longest))
         s["box_outside_over_1s"] = int(np.sum(longest > 1.0))
-    per_uav = sorted((k for k in episodes[0] if k.startswith(_PER_UAV_PREFIX)), key=lambda k: int(k[len(_PER_UAV_PREFIX):]))
+    per_uav = per_uav_keys(episodes[0])
     for key in per_uav:
         s[key] = float(np.mean([e[key] for e in episodes]))
     for key in ("induced_drag_saving", "harvest_ratio", "rms_lateral_m", "rms_vertical_m", "formation_saving", *per_uav):
