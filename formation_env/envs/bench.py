@@ -16,7 +16,7 @@ import sys
 import tempfile
 from pathlib import Path
 
-__all__ = ["run_benchmarks", "BATCH_SIZES", "SINGLE_CASES", "TURBULENCE_CASES"]
+__all__ = ["run_benchmarks", "BATCH_SIZES", "SINGLE_CASES", "TURBULENCE_CASES", "FORMATION_SIZE_CASES"]
 
 PEERS = {
     "PyFlyt 2-aircraft dogfight (joint steps/s)": 408,
@@ -28,6 +28,8 @@ SINGLE_CASES = [{"kind": "single", "mode": m, "learning": "all"} for m in ("surf
     {"kind": "single", "mode": "setpoints", "learning": "followers"}]
 BATCH_SIZES = (1, 8, 15, 16, 32, 256, 1024)
 TURBULENCE_CASES = ("von_karman", "lanes")  # EnvConfig.turbulence_field values measured at B = 256, sigma 1 m/s
+# formations of 3, 5 and 9 at B = 256 (issues 25 and 26: decisions/s and UAV physics steps/s against 2 UAVs)
+FORMATION_SIZE_CASES = ("echelon3", "vee5", "vee9")
 
 
 def _vector_cases(sizes) -> list[dict]:
@@ -82,6 +84,7 @@ def _key(case: dict) -> str:
     if case["kind"] == "single":
         return f"single {case['mode']} learning={case['learning']}"
     return f"vector B={case['formations']} {case['mode']} learning={case['learning']}" + (
+        f" {case['scenario']}" if case.get("scenario") else "") + (
         " benefit" if case.get("benefit") else "") + (f" turbulence={case['turbulence']}" if case.get("turbulence") else "")
 
 
@@ -95,6 +98,8 @@ def run_benchmarks(quick: bool = False, baseline: str | None = None, busy: bool 
         # the turbulence models at sigma 1 m/s (their cost against the B = 256 case without turbulence)
         {"kind": "vector", "formations": 256, "mode": "setpoints", "learning": "followers", "turbulence": field}
         for field in TURBULENCE_CASES] + [
+        {"kind": "vector", "formations": 256, "mode": "setpoints", "learning": "followers", "scenario": name}
+        for name in FORMATION_SIZE_CASES] + [
         # the machine's own decision-to-decision spread (a fixed numpy workload), beside the env's
         {"kind": "machine"}]
     configs = [(2, False), (1, False)] + ([(2, True), (1, True)] if busy else [])
@@ -127,6 +132,9 @@ def run_benchmarks(quick: bool = False, baseline: str | None = None, busy: bool 
             if "unsupported" in new[i]:
                 raise RuntimeError(f"bench case {_key(case)}: {new[i]['unsupported']}")
             row = {"new": new[i][metric]}
+            if case["kind"] == "vector":
+                row["uavs"] = new[i].get("uavs", 2)
+                row["agent_decisions_per_s"] = new[i]["agent_decisions_per_s"]
             if "decision_max_over_min" in new[i]:  # issue 26: the slowest of 40 consecutive decisions over the fastest
                 row["spread"] = new[i]["decision_max_over_min"]
                 if old is not None and "decision_max_over_min" in old[i]:
@@ -159,6 +167,15 @@ def format_table(res: dict) -> str:
                 f" (old {res['configurations'][c][key]['spread_old']:.2f})" if "spread_old" in res["configurations"][c][key] else "")
                 for c in confs]
             lines.append(f"| {key}: max/min of 40 decisions | " + " | ".join(cells) + " |")
+    # formations of 3-9 UAVs: per-UAV throughput over the 2-UAV case at the same B (1 when a UAV costs the same
+    # in any formation) and the learners' decisions/s (the followers, each a row of the VecEnv)
+    first = res["configurations"][confs[0]]
+    two = "vector B=256 setpoints learning=followers"
+    for key in first:
+        if key.startswith(two + " ") and first[key].get("uavs", 2) > 2 and two in first:
+            cells = [f"{res['configurations'][c][key]['new'] / res['configurations'][c][two]['new']:.2f}x, "
+                     f"{res['configurations'][c][key]['agent_decisions_per_s']:,.0f} decisions/s" for c in confs]
+            lines.append(f"| {key}: UAV physics steps/s over 2 UAVs', follower decisions/s | " + " | ".join(cells) + " |")
     ms = res.get("machine_spread")
     if ms:
         lines.append("| the machine: max/min of 40 runs of a fixed numpy workload | "

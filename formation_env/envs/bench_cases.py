@@ -4,11 +4,11 @@ one (``python -m formation_env.envs.bench_cases CASES_JSON`` with the older chec
 
 A case is a dict: ``{"kind": "single", "mode": ..., "learning": ...}`` (PettingZoo parallel env,
 B = 1) or ``{"kind": "vector", "formations": B, "mode": ..., "learning": ..., "wake_update_every": k,
-"benefit": bool, "turbulence": field name, "sigma": m/s}`` (SB3 VecEnv; turbulence of that field at sigma,
-default 1 m/s) or ``{"kind": "machine"}`` (a fixed numpy workload: the machine's own timing spread). A
+"benefit": bool, "turbulence": field name, "sigma": m/s, "scenario": name}`` (SB3 VecEnv; turbulence of that
+field at sigma, default 1 m/s; scenario default formation_keeping, e.g. ``vee5`` for a formation of 5) or ``{"kind": "machine"}`` (a fixed numpy workload: the machine's own timing spread). A
 vector case also reports the spread of 40 consecutive decisions timed one by one. A case the code under test cannot build (an older checkout without a newer option) gives
 ``{"unsupported": reason}`` instead of figures. All cases: formation_keeping, 2 Aerosondes, wake on, 10 Hz
-decisions (5 physics steps each). Result: the best of ``repeats`` timed runs after a warm-up run
+decisions (5 physics steps each), unless a vector case names another scenario. Result: the best of ``repeats`` timed runs after a warm-up run
 (best, not median: on a shared 2-core machine the slower runs measure the neighbours).
 """
 
@@ -74,15 +74,17 @@ def _vector(case: dict, budget_s: float, repeats: int) -> dict:
         opts["turbulence_field"] = case["turbulence"]
         opts["randomisation"] = Randomisation(turbulence_sigma_mps=case.get("sigma", 1.0))
     try:
-        venv = FormationVecEnv(n, scenario="formation_keeping", learning=case["learning"], action_mode=case["mode"],
-                               seed=0, **opts)
-    except (TypeError, ValueError) as exc:  # an older checkout without this option
+        venv = FormationVecEnv(n, scenario=case.get("scenario", "formation_keeping"), learning=case["learning"],
+                               action_mode=case["mode"], seed=0, **opts)
+    except (TypeError, ValueError, KeyError) as exc:  # an older checkout without this option or scenario
         return {**case, "unsupported": f"{type(exc).__name__}: {exc}"}
     venv.reset()
     act = np.zeros((venv.num_envs, 4), np.float32)
     decisions, t = _calibrated(lambda: venv.step(act), budget_s, repeats)
     physics = n * decisions * 5 / t
-    return {**case, "formation_physics_steps_per_s": physics, "uav_physics_steps_per_s": 2 * physics,
+    sim = getattr(getattr(venv, "batch", None), "sim", None)  # an older checkout: 2 UAVs (formation_keeping)
+    uavs = int(sim.n_vehicles) if sim is not None else 2
+    return {**case, "uavs": uavs, "formation_physics_steps_per_s": physics, "uav_physics_steps_per_s": uavs * physics,
             "agent_decisions_per_s": venv.num_envs * decisions / t, **_spread(lambda: venv.step(act))}
 
 

@@ -59,6 +59,9 @@ OPTION_RANGES: dict[str, tuple[float, float, str, str]] = {
     "RewardWeights.box": _WEIGHT,
     "RewardWeights.box_scale_b": (0.01, 10.0, "spans", "Huber knee of the depth outside the safe box (3 cm to "
                                   "29 m)"),
+    "RewardWeights.hold": _WEIGHT,
+    "RewardWeights.hold_radius_b": (0.01, 10.0, "spans", "distance from the slot beyond which the hold phase charges "
+                                    "the hold cost (3 cm to 29 m; the reconfiguration success window: 1 span)"),
     "Randomisation.initial_offset_m": (0.0, 50.0, "m", "std of the initial position jitter: up to ~6 slot "
                                        "spacings; beyond, followers start in another formation's place"),
     "Randomisation.slot_offset_b": (0.0, 2.0, "spans", "std of the slot jitter: about one slot spacing "
@@ -133,6 +136,7 @@ class RewardWeights:
             + benefit * min(induced-drag saving, benefit_cap)
             - (collision + F) * [collision] - (crash + F) * [left the envelope or non-finite]
             - box * (1 + h(min(q / box_scale, 5))) * [q > 0]  q: distance outside the scenario's safe box
+            - (hold + H) * [hold phase and e >= hold_radius]              the success window of a moving slot
 
     F = terminal_forfeit * slot * h(min(e_prev, 100 m) / slot_scale_m) * (decisions left until the time
     limit): ending the episode forfeits the slot costs still to come, so a collision or crash must charge
@@ -144,6 +148,14 @@ class RewardWeights:
     ``box`` as soon as the UAV is outside (a constraint, not a shaping: it must outweigh any saving the
     ELL reports beyond the box, up to ~0.8 in the band around the leader's wake plane the box excludes)
     plus h of the depth in ``box_scale_b`` spans (quadratic near the wall, linear far out).
+
+    The hold phase of a UAV is the time after the last keyframe of its slot schedule (a moving slot, e.g.
+    ``reconfiguration``: from 50 s; a fixed slot: the whole episode); the leader has none. There ``hold`` is
+    charged at every decision the UAV is at least ``hold_radius_b`` spans from its slot (e as in the slot term):
+    a step, like the success criterion of a reconfiguration (within 1 span at every decision of the last 5 s),
+    which the Huber slot cost alone does not pose. H = terminal_forfeit * hold * (hold-phase decisions left) is
+    charged with a collision or crash: with terminal_forfeit = 1 ending the episode never avoids the hold costs
+    still to come (at most one per decision, as if outside the radius throughout).
 
     d_safe = ``barrier_separation_b`` spans, d_coll = the env's ``collision_separation_b`` spans. The slot
     term never saturates: it keeps decreasing with the error however far the UAV drifts. The shaping
@@ -171,6 +183,8 @@ class RewardWeights:
     crash: float = 50.0
     box: float = 0.0
     box_scale_b: float = 0.1
+    hold: float = 0.0
+    hold_radius_b: float = 1.0
 
     def __post_init__(self) -> None:
         _validate_fields(self)  # each weight within OPTION_RANGES (a number, never bool)

@@ -32,7 +32,7 @@ VELOCITY_SCALE_MPS = 1.0
 WIND_SCALE_MPS = 1.0
 NEIGHBOUR_POSITION_SCALE_M = 3.0
 CONTROLLER_STATE_SCALE = 1.0
-REWARD_TERMS = ("slot", "progress", "separation", "effort", "rate", "benefit", "collision", "crash", "box")
+REWARD_TERMS = ("slot", "progress", "separation", "effort", "rate", "benefit", "collision", "crash", "box", "hold")
 _ERROR_CAP_M = 5000.0  # beyond any reachable distance: only bounds a diverged UAV's reward
 _TERMINAL_ERROR_CAP_M = 100.0
 ABSENT_NEIGHBOUR_M = 1000.0  # where an observed neighbour the formation lacks reads (m behind, same velocity)
@@ -216,7 +216,7 @@ def _capped(e):
 @_jit
 def reward_formation(w, error, previous_error, action, previous_action, saving, separation, collided, crashed,
                      remaining_decisions, box_depth, out):
-    """Reward terms (V, 9) in :data:`REWARD_TERMS` order of one formation (the definition:
+    """Reward terms (V, 10) in :data:`REWARD_TERMS` order of one formation (the definition:
     :class:`formation_env.envs.config.RewardWeights`). error, previous_error (V,) m; separation (V,)
     m to the nearest UAV; collided bool; crashed (V,) bool; remaining_decisions until the time limit;
     box_depth (V,) m outside the safe box (0 inside)."""
@@ -229,6 +229,8 @@ def reward_formation(w, error, previous_error, action, previous_action, saving, 
             sep = 0.0
         depth = min(1.0, max(0.0, (d_safe - sep) / max(d_safe - w.collision_separation_m, 1e-9)))
         forfeit = w.terminal_forfeit * w.slot * _huber(min(prev, _TERMINAL_ERROR_CAP_M) / w.slot_scale_m) * remaining_decisions
+        # the hold phase's costs still to come go with the episode's end (a step each, whatever the error)
+        hold_left = w.terminal_forfeit * w.hold * max(0.0, min(remaining_decisions, w.hold_remaining[a]))
         effort = 0.0
         rate = 0.0
         for k in range(4):
@@ -240,12 +242,14 @@ def reward_formation(w, error, previous_error, action, previous_action, saving, 
         out[a, 3] = -w.effort * effort / 4.0
         out[a, 4] = -w.rate * rate / 4.0
         out[a, 5] = w.benefit * min(saving[a], w.benefit_cap) if math.isfinite(saving[a]) else 0.0
-        out[a, 6] = -(w.collision + forfeit) if collided else 0.0
-        out[a, 7] = -(w.crash + forfeit) if crashed[a] else 0.0
+        out[a, 6] = -(w.collision + forfeit + hold_left) if collided else 0.0
+        out[a, 7] = -(w.crash + forfeit + hold_left) if crashed[a] else 0.0
         # capped at BOX_DEPTH_CAP_SCALES: far outside the box the cost stays bounded (the returns'
         # scale), and the step at the wall already outweighs any saving the ELL reports beyond it
         depth_scales = min(box_depth[a] / w.box_scale_m, BOX_DEPTH_CAP_SCALES)
         out[a, 8] = -w.box * (1.0 + _huber(depth_scales)) if box_depth[a] > 0.0 else 0.0
+        in_hold = remaining_decisions <= w.hold_remaining[a]
+        out[a, 9] = -w.hold if (w.hold > 0.0 and in_hold and not err < w.hold_radius_m) else 0.0
 
 
 def group_sizes(n_vehicles: int, neighbour_count: int | None = None) -> dict[str, int]:

@@ -128,23 +128,42 @@ class RewardParams(NamedTuple):
     box_low_m: np.ndarray  # (V, 3) each UAV's safe box relative to vehicle 0, slot frame, m (-inf: unbounded)
     box_high_m: np.ndarray  # (V, 3) upper corners, m (+inf: unbounded)
     slot_error_axes: np.ndarray  # (3,) weights of the slot error's slot-frame components (along, starboard, down)
+    hold: float  # cost per decision outside the hold radius in the hold phase
+    hold_radius_m: float
+    hold_remaining: np.ndarray  # (V,) decisions from the last keyframe of each UAV's slot to the time limit (-1: none)
 
     @classmethod
-    def from_config(cls, weights, scenario, collision_separation_b: float) -> "RewardParams":
+    def from_config(cls, weights, scenario, collision_separation_b: float, duration_s: float | None = None,
+                    control_hz: float = 10.0) -> "RewardParams":
         """The reward of an environment: ``weights`` a :class:`~formation_env.envs.config.RewardWeights`
         (its distances in spans are converted to m with :data:`AEROSONDE_SPAN_M`), ``scenario`` a
         :class:`~formation_env.scenarios.Scenario` (the safe box, :func:`safe_box_arrays`, and the slot
         error's axes, :func:`slot_error_axes`), ``collision_separation_b`` the collision separation,
-        spans."""
+        spans; ``duration_s`` (None: the scenario's) and ``control_hz`` place each slot's hold phase
+        (:func:`hold_remaining_decisions`)."""
         w, span = weights, AEROSONDE_SPAN_M
         box_low, box_high = safe_box_arrays(scenario)
+        duration = scenario.duration_s if duration_s is None else duration_s
         return cls(slot=w.slot, slot_scale_m=w.slot_scale_m, effort=w.effort, rate=w.rate, benefit=w.benefit,
                    benefit_cap=w.benefit_cap,
                    progress=w.progress, shaping_gamma=w.shaping_gamma, terminal_forfeit=w.terminal_forfeit,
                    separation=w.separation, barrier_separation_m=w.barrier_separation_b * span,
                    collision=w.collision, crash=w.crash, collision_separation_m=collision_separation_b * span,
                    box=w.box, box_scale_m=w.box_scale_b * span, box_low_m=box_low, box_high_m=box_high,
-                   slot_error_axes=slot_error_axes(scenario) * np.array([w.along_track_weight, 1.0, 1.0]))
+                   slot_error_axes=slot_error_axes(scenario) * np.array([w.along_track_weight, 1.0, 1.0]),
+                   hold=w.hold, hold_radius_m=w.hold_radius_b * span,
+                   hold_remaining=hold_remaining_decisions(scenario, duration, control_hz))
+
+
+def hold_remaining_decisions(sc, duration_s: float, control_hz: float) -> np.ndarray:
+    """(V,) for each UAV the decisions from the last keyframe of its slot schedule to the time limit: its hold
+    phase is every decision with at most this many left (:class:`~formation_env.envs.config.RewardWeights`);
+    the leader, which has no slot, -1 (never). A schedule ending after the time limit: 0 decisions, only the
+    last decision of the episode."""
+    out = np.full(sc.n_vehicles, -1.0)
+    for j, slot in enumerate(sc.slots):
+        out[j + 1] = max(0.0, (duration_s - slot.keyframes[-1][0]) * control_hz)
+    return out
 
 
 class TurbulenceParams(NamedTuple):

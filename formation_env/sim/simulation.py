@@ -171,7 +171,8 @@ class Simulation:
                                         self.surface_limit_rad, self.throttle_limits, self.scenario)
 
     def _reward_params(self, config: EnvConfig) -> RewardParams:
-        return RewardParams.from_config(config.reward, self.scenario, config.collision_separation_b)
+        return RewardParams.from_config(config.reward, self.scenario, config.collision_separation_b,
+                                        self.duration_s, config.control_hz)
 
     # ------------------------------------------------------------------ API
     @property

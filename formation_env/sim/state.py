@@ -52,7 +52,7 @@ class StepOutput(NamedTuple):
 
     observation: np.ndarray  # (B, V, D) float64
     reward: np.ndarray  # (B, V) total reward
-    reward_terms: np.ndarray  # (B, V, 9) in formation_env.sim.observe.REWARD_TERMS order
+    reward_terms: np.ndarray  # (B, V, 10) in formation_env.sim.observe.REWARD_TERMS order
     terminated: np.ndarray  # (B,) bool: collision or a UAV left the envelope
     truncated: np.ndarray  # (B,) bool: time limit reached (and not terminated)
     collided: np.ndarray  # (B,) bool: two CGs came closer than the collision separation

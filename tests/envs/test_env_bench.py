@@ -53,3 +53,19 @@ def test_decision_spread_is_measured_and_tabled_beside_the_machines():
     table = bench.format_table(res)
     assert f"| {key}: max/min of 40 decisions | 1.42 (old 2.31) |" in table
     assert "| the machine: max/min of 40 runs of a fixed numpy workload | 1.27 |" in table
+
+
+def test_formation_size_cases_count_every_uav_and_table_their_scaling():
+    """Issues 25/26: a vector case of a vee of 5 counts 5 UAVs per formation physics step and 4 follower rows; the
+    table divides its UAV physics steps/s by the 2-UAV case's at the same B."""
+    vee = run_case({"kind": "vector", "formations": 2, "mode": "setpoints", "learning": "followers",
+                    "scenario": "vee5"}, budget_s=0.0005, repeats=1)
+    assert vee["uavs"] == 5 and np.isclose(vee["uav_physics_steps_per_s"], 5 * vee["formation_physics_steps_per_s"])
+    # 4 follower rows per formation, 5 physics steps per decision
+    assert np.isclose(vee["agent_decisions_per_s"], 4 * vee["formation_physics_steps_per_s"] / 5)
+    assert set(bench.FORMATION_SIZE_CASES) == {"echelon3", "vee5", "vee9"}
+    two = "vector B=256 setpoints learning=followers"
+    res = {"configurations": {"threads=2": {
+        two: {"new": 1.0e5, "uavs": 2, "agent_decisions_per_s": 1.0e4},
+        two + " vee5": {"new": 4.0e4, "uavs": 5, "agent_decisions_per_s": 3.2e3}}}}
+    assert f"| {two} vee5: UAV physics steps/s over 2 UAVs', follower decisions/s | 0.40x, 3,200 decisions/s |" in bench.format_table(res)

@@ -214,3 +214,76 @@ def test_a_diverged_uav_does_not_break_the_frozen_field():
     assert np.all(np.isfinite(env.sim.output.observation))
     obs, rew, term, trunc, _ = env.step({a: np.zeros(4, np.float32) for a in env.agents})
     assert term["uav_1"] and np.isfinite(rew["uav_1"]) and np.all(np.isfinite(obs["uav_1"]))
+
+
+# ------------------------------------------------------------------ the hold phase (success window) of a moving slot
+def test_hold_phase_follows_the_slot_schedule():
+    from formation_env.scenarios import get_scenario
+    from formation_env.sim.params import hold_remaining_decisions
+
+    sc = get_scenario("reconfiguration")  # last keyframe at 50 s
+    np.testing.assert_array_equal(hold_remaining_decisions(sc, 60.0, 10.0), [-1.0, 100.0])
+    np.testing.assert_array_equal(hold_remaining_decisions(sc, 52.0, 5.0), [-1.0, 10.0])
+    np.testing.assert_array_equal(hold_remaining_decisions(sc, 40.0, 10.0), [-1.0, 0.0])  # never reached: last decision only
+    fixed = get_scenario("formation_keeping")  # a fixed slot: the whole episode
+    np.testing.assert_array_equal(hold_remaining_decisions(fixed, 60.0, 10.0), [-1.0, 600.0])
+
+
+def test_hold_cost_is_charged_after_the_last_keyframe_only_and_matches_the_oracle():
+    """Reconfiguration shortened to 52 s, the thesis PID flying the schedule: no hold cost before 50 s; after,
+    the step ``hold`` exactly at the decisions the follower is at least the radius from its slot (a radius
+    of 0.52 span: the PID closes from 1.65 to 1.39 m over these 2 s, so that both occur), as the numpy definition says."""
+    from formation_env.sim import Simulation
+
+    w = RewardWeights(hold=2.0, hold_radius_b=0.52)
+    cfg = EnvConfig(scenario="reconfiguration", action_mode="setpoints", learning="followers", duration_s=52.0,
+                    reward=w)
+    sim = Simulation(cfg, batch_size=1)
+    sim.reset(seeds=[3])
+    hold, err, left = [], [], []
+    for k in range(520):
+        sim.step(np.zeros((1, 1, 4)))
+        out = sim.output
+        hold.append(out.reward_terms[0, 1, 9])
+        err.append(out.slot_error_m[0, 1])
+        left.append(519 - k)
+    hold, err, left = np.array(hold), np.array(err), np.array(left, float)
+    assert np.all(hold[:499] == 0.0)  # decisions ending before 50 s
+    late = left <= 20
+    assert np.any(hold[late] == -2.0) and np.any(hold[late] == 0.0)
+    z = np.zeros((520, 1))
+    ref = reward_terms(w, err[:, None], err[:, None], z[..., None].repeat(4, -1), z[..., None].repeat(4, -1), z,
+                       np.full((520, 1), 100.0), np.zeros((520, 1), bool), np.zeros((520, 1), bool), 0.5 * B, B,
+                       remaining_decisions=left, hold_remaining=[20.0])
+    np.testing.assert_array_equal(hold, ref["hold"][:, 0])
+
+
+def test_ending_the_episode_never_avoids_the_hold_costs():
+    """The compiled reward against its oracle on random inputs, collisions and crashes included: a collision
+    charges (terminal_forfeit times) the hold cost of every hold-phase decision left, so ending never pays."""
+    from formation_env.scenarios import get_scenario
+    from formation_env.sim.observe import REWARD_TERMS, reward_formation
+    from formation_env.sim.params import RewardParams
+
+    sc = get_scenario("reconfiguration")
+    w = RewardWeights(hold=1.5, hold_radius_b=1.0, terminal_forfeit=0.5)
+    p = RewardParams.from_config(w, sc, 0.5, 60.0, 10.0)
+    rng = np.random.default_rng(0)
+    for remaining in (300.0, 100.0, 37.0, 0.0):
+        for collided in (False, True):
+            err = rng.uniform(0.0, 6.0, 2)
+            act, prev = rng.uniform(-1, 1, (2, 4)), rng.uniform(-1, 1, (2, 4))
+            crashed = np.array([False, bool(rng.integers(2))])
+            terms = np.zeros((2, len(REWARD_TERMS)))
+            reward_formation(p, err, err, act, prev, np.zeros(2), np.full(2, 50.0), collided, crashed, remaining,
+                             np.zeros(2), terms)
+            ref = reward_terms(w, err[None], err[None], act[None], prev[None], np.zeros((1, 2)), np.full((1, 2), 50.0),
+                               np.full((1, 2), collided), crashed[None], 0.5 * B, B,
+                               remaining_decisions=np.array([remaining]), hold_remaining=p.hold_remaining)
+            for j, key in enumerate(REWARD_TERMS):
+                np.testing.assert_allclose(terms[:, j], ref[key][0], rtol=1e-12, atol=1e-15, err_msg=key)
+    hit = reward_terms(w, np.array([[5.0]]), np.array([[5.0]]), np.zeros((1, 1, 4)), np.zeros((1, 1, 4)), np.zeros((1, 1)),
+                       np.ones((1, 1)), np.ones((1, 1), bool), np.zeros((1, 1), bool), 0.5 * B, B,
+                       remaining_decisions=np.array([60.0]), hold_remaining=[100.0])
+    forfeit = 0.5 * w.slot * huber(5.0 / w.slot_scale_m) * 60
+    assert hit["collision"][0, 0] == pytest.approx(-(w.collision + forfeit + 0.5 * 60 * 1.5))

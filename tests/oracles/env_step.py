@@ -87,13 +87,15 @@ def build_observations_reference(state, induced_ned, omega_body, ambient_ned, tu
 
 
 def reward_terms(w: RewardWeights, error, previous_error, action, previous_action, saving, separation, collided,
-                 crashed, collision_separation_m: float, span_m: float, remaining_decisions=0, box_depth_m=None) -> dict:
+                 crashed, collision_separation_m: float, span_m: float, remaining_decisions=0, box_depth_m=None,
+                 hold_remaining=None) -> dict:
     """Reward components (B, V) and their sum under ``"total"`` (see :class:`RewardWeights`).
 
     error, previous_error: distance from the slot now and at the previous decision (m); separation:
     distance to the nearest other UAV (m, inf alone); remaining_decisions (B,): decisions left until
     the time limit; box_depth_m (B, V): distance outside the safe box (default 0: inside). Non-finite
-    inputs count as a crash: a diverged UAV is treated as 5 km from its slot.
+    inputs count as a crash: a diverged UAV is treated as 5 km from its slot. hold_remaining (V,): the
+    decisions of each UAV's hold phase (after its slot's last keyframe; -1: none; default none).
 
     A collision or crash ends the episode, which would also end the slot costs still to come: with
     costs per decision, ending early could pay. So the terminal penalty also charges the slot cost
@@ -111,6 +113,9 @@ def reward_terms(w: RewardWeights, error, previous_error, action, previous_actio
         remaining = np.asarray(remaining_decisions, dtype=float)
         remaining = remaining[:, None] if remaining.ndim == 1 else remaining
         forfeit = w.terminal_forfeit * w.slot * huber(np.minimum(prev, _TERMINAL_ERROR_CAP_M) / w.slot_scale_m) * remaining
+        hold_remaining = np.full(err.shape[-1], -1.0) if hold_remaining is None else np.asarray(hold_remaining, float)
+        in_hold = remaining <= hold_remaining  # (B, V)
+        hold_left = w.terminal_forfeit * w.hold * np.maximum(0.0, np.minimum(remaining, hold_remaining))  # forfeited with the episode
         terms = {
             "slot": -w.slot * cost,
             "progress": w.progress * (cost_prev - w.shaping_gamma * cost),  # gamma * Phi(s') - Phi(s), Phi = -cost
@@ -118,12 +123,13 @@ def reward_terms(w: RewardWeights, error, previous_error, action, previous_actio
             "effort": -w.effort * np.sum(action * action, axis=-1) / 4.0,
             "rate": -w.rate * np.sum((action - previous_action) ** 2, axis=-1) / 4.0,
             "benefit": w.benefit * np.where(np.isfinite(saving), np.minimum(saving, w.benefit_cap), 0.0),
-            "collision": -(w.collision + forfeit) * collided.astype(float),
-            "crash": -(w.crash + forfeit) * crashed.astype(float),
+            "collision": -(w.collision + forfeit + hold_left) * collided.astype(float),
+            "crash": -(w.crash + forfeit + hold_left) * crashed.astype(float),
         }
         q = np.zeros_like(err) if box_depth_m is None else np.asarray(box_depth_m, dtype=float)
         box_scale_m = w.box_scale_b * span_m
         terms["box"] = np.where(q > 0.0, -w.box * (1.0 + huber(np.minimum(q / box_scale_m, BOX_DEPTH_CAP_SCALES))), 0.0)
+        terms["hold"] = np.where(in_hold & ~(err < w.hold_radius_b * span_m), -w.hold, 0.0) * np.ones_like(err)
     terms["total"] = sum(terms.values())
     return terms
 

@@ -67,7 +67,8 @@ def test_report_committed_out_writes_only_under_out(tmp_path, monkeypatch, capsy
     before = _tracked_state()
     out = tmp_path / "eval"
     assert rc.main(["--out", str(out), "--episodes", "2", "--tasks", "formation_keeping"]) == 0
-    assert calls == ["formation_keeping", "formation_keeping"]  # the test set, then the validation baselines
+    # the test set, then the validation baselines (of every task: the curves figure shows them all)
+    assert calls == ["formation_keeping", "formation_keeping", "close_formation", "reconfiguration"]
     assert _tracked_state() == before  # nothing tracked is touched
     for f in ("formation_keeping/results.json", "policies/formation_keeping_ppo_setpoints_evaluation.json",
               "policies/formation_keeping_ppo_setpoints_seed2.json", "figures/eval_formation_keeping_slot_error.png",
@@ -103,7 +104,7 @@ def test_report_committed_checks_every_output_before_evaluating(tmp_path, monkey
     fig.unlink()
     fig.mkdir()
     old = (pol / "formation_keeping_ppo_setpoints_evaluation.json").read_text()
-    assert rc.main(argv) == 0 and len(calls) == 2  # --overwrite: the tracked records are replaced
+    assert rc.main(argv) == 0 and len(calls) == 4  # --overwrite: the tracked records are replaced
     assert (pol / "formation_keeping_ppo_setpoints_evaluation.json").read_text() != old
     assert (fig / "eval_formation_keeping_slot_error.png").read_bytes() == b"\x89PNG fake"
     assert not (tmp_path / "eval" / "policies").exists()
