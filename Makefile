@@ -7,6 +7,9 @@ STAMP   = $(VENV)/.installed-$(shell cat pyproject.toml constraints.txt | cksum 
 # runs them) and TorchRL (compat; it leaves torch and every other pin unchanged), with the CPU torch
 # build pinned by constraints.txt (pyproject only gives torch>=2.3).
 EXTRAS ?= test,distributed,compat
+# The tests run in TEST_WORKERS processes (pytest-xdist), whole files to a worker (their module fixtures are
+# built once); 0 runs them in this process.
+TEST_WORKERS ?= 2
 OUT    ?=
 
 .PHONY: demo test bench verify report clean install
@@ -28,7 +31,7 @@ demo: $(STAMP)
 	$(VENV)/bin/formation-env demo $(if $(OUT),--out $(OUT),)
 
 test: $(STAMP)
-	$(PY) -m pytest
+	$(PY) -m pytest $(if $(filter 0,$(TEST_WORKERS)),,-n $(TEST_WORKERS) --dist loadfile)
 
 bench: $(STAMP)
 	$(VENV)/bin/formation-env bench
