@@ -47,7 +47,7 @@ def test_threaded_faster_is_kept_without_serial_spikes(two_threads):
 
 def test_serial_faster_backs_off_its_remeasurements(two_threads):
     tuner = step._ThreadTuner()
-    k = _Kernel(8, per_row=0.0, per_call=2e-3)  # every chunk pays the per-call cost: threaded is slower
+    k = _Kernel(8, per_row=0.0, per_call=6e-3)  # every chunk pays the per-call cost: threaded (~12 ms) is slower
     serial = list(_calls(tuner, k, 240))
     threaded_after_warmup = [i + 1 for i, s in enumerate(serial) if not s and i >= 5]
     # re-measured after 32 calls, then 64, 128: the interval doubles while serial is confirmed
@@ -56,8 +56,9 @@ def test_serial_faster_backs_off_its_remeasurements(two_threads):
 
 def test_follows_the_machine_when_threads_get_slower(two_threads):
     tuner = step._ThreadTuner()
-    k = _Kernel(8, per_row=1e-3)
+    # timings a few times the scheduling noise of a busy 2-core machine (another test process beside this one)
+    k = _Kernel(8, per_row=3e-3)
     list(_calls(tuner, k, 20))
-    k.per_row, k.per_call = 0.0, 4e-3  # now threads lose (~16 ms against the 8 ms serial measured before): their own average rises above serial's, no waiting
+    k.per_row, k.per_call = 0.0, 12e-3  # now threads lose (~48 ms against the 24 ms serial measured before): their own average rises above serial's, no waiting
     serial = list(_calls(tuner, k, 20))
     assert all(serial[8:])
