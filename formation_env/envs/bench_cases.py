@@ -82,8 +82,9 @@ def _vector(case: dict, budget_s: float, repeats: int) -> dict:
     act = np.zeros((venv.num_envs, 4), np.float32)
     decisions, t = _calibrated(lambda: venv.step(act), budget_s, repeats)
     physics = n * decisions * 5 / t
-    sim = getattr(getattr(venv, "batch", None), "sim", None)  # an older checkout: 2 UAVs (formation_keeping)
-    uavs = int(sim.n_vehicles) if sim is not None else 2
+    from formation_env.scenarios import get_scenario
+
+    uavs = get_scenario(case.get("scenario", "formation_keeping")).n_vehicles
     return {**case, "uavs": uavs, "formation_physics_steps_per_s": physics, "uav_physics_steps_per_s": uavs * physics,
             "agent_decisions_per_s": venv.num_envs * decisions / t, **_spread(lambda: venv.step(act))}
 

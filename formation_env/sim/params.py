@@ -133,17 +133,16 @@ class RewardParams(NamedTuple):
     hold_remaining: np.ndarray  # (V,) decisions from the last keyframe of each UAV's slot to the time limit (-1: none)
 
     @classmethod
-    def from_config(cls, weights, scenario, collision_separation_b: float, duration_s: float | None = None,
-                    control_hz: float = 10.0) -> "RewardParams":
+    def from_config(cls, weights, scenario, collision_separation_b: float, *, duration_s: float,
+                    control_hz: float) -> "RewardParams":
         """The reward of an environment: ``weights`` a :class:`~formation_env.envs.config.RewardWeights`
         (its distances in spans are converted to m with :data:`AEROSONDE_SPAN_M`), ``scenario`` a
         :class:`~formation_env.scenarios.Scenario` (the safe box, :func:`safe_box_arrays`, and the slot
         error's axes, :func:`slot_error_axes`), ``collision_separation_b`` the collision separation,
-        spans; ``duration_s`` (None: the scenario's) and ``control_hz`` place each slot's hold phase
+        spans; the episode's ``duration_s`` and ``control_hz`` place each slot's hold phase
         (:func:`hold_remaining_decisions`)."""
         w, span = weights, AEROSONDE_SPAN_M
         box_low, box_high = safe_box_arrays(scenario)
-        duration = scenario.duration_s if duration_s is None else duration_s
         return cls(slot=w.slot, slot_scale_m=w.slot_scale_m, effort=w.effort, rate=w.rate, benefit=w.benefit,
                    benefit_cap=w.benefit_cap,
                    progress=w.progress, shaping_gamma=w.shaping_gamma, terminal_forfeit=w.terminal_forfeit,
@@ -152,7 +151,7 @@ class RewardParams(NamedTuple):
                    box=w.box, box_scale_m=w.box_scale_b * span, box_low_m=box_low, box_high_m=box_high,
                    slot_error_axes=slot_error_axes(scenario) * np.array([w.along_track_weight, 1.0, 1.0]),
                    hold=w.hold, hold_radius_m=w.hold_radius_b * span,
-                   hold_remaining=hold_remaining_decisions(scenario, duration, control_hz))
+                   hold_remaining=hold_remaining_decisions(scenario, duration_s, control_hz))
 
 
 def hold_remaining_decisions(sc, duration_s: float, control_hz: float) -> np.ndarray:

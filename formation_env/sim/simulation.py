@@ -172,7 +172,7 @@ class Simulation:
 
     def _reward_params(self, config: EnvConfig) -> RewardParams:
         return RewardParams.from_config(config.reward, self.scenario, config.collision_separation_b,
-                                        self.duration_s, config.control_hz)
+                                        duration_s=self.duration_s, control_hz=config.control_hz)
 
     # ------------------------------------------------------------------ API
     @property

@@ -267,7 +267,7 @@ def test_ending_the_episode_never_avoids_the_hold_costs():
 
     sc = get_scenario("reconfiguration")
     w = RewardWeights(hold=1.5, hold_radius_b=1.0, terminal_forfeit=0.5)
-    p = RewardParams.from_config(w, sc, 0.5, 60.0, 10.0)
+    p = RewardParams.from_config(w, sc, 0.5, duration_s=60.0, control_hz=10.0)
     rng = np.random.default_rng(0)
     for remaining in (300.0, 100.0, 37.0, 0.0):
         for collided in (False, True):
