@@ -87,7 +87,11 @@ def env_config_for(scenario: str, action_mode: str, env_kwargs: dict, **override
             rew = RewardWeights(**rew)
     except TypeError as exc:
         raise ValueError(f"env_kwargs: {exc}") from None
-    learning = kw.pop("learning", "followers")
+    learning = kw.pop("learning", None)
+    if learning is None:  # the task's own (vee_rotation: every UAV), else the followers
+        from formation_env.tasks import task_learning
+
+        learning = task_learning(scenario)
     if isinstance(learning, list):
         learning = tuple(learning)
     return EnvConfig(scenario=scenario, learning=learning, action_mode=action_mode, obs_mode="flat",

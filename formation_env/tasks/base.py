@@ -17,7 +17,7 @@ from ..scenarios import Scenario, get_scenario, register_scenario
 from ..sim.config import EnvConfig
 
 __all__ = ["Task", "register_task", "get_task", "task_names", "TASKS", "task_options", "task_for_scenario", "make_config",
-           "gym_ids"]
+           "gym_ids", "task_learning"]
 
 
 @dataclass(frozen=True)
@@ -29,7 +29,10 @@ class Task:
     ``reference``: the reference optimum (a module or object, None where the task has none); ``metrics``:
     a callable making the task's own per-episode metrics (None: the generic evaluation table);
     ``test_randomisation``: :class:`~formation_env.sim.config.Randomisation` fields the held-out test set (and
-    the training's validation) draws besides the turbulence level, so that even calm-air episodes differ."""
+    the training's validation) draws besides the turbulence level, so that even calm-air episodes differ;
+    ``learning``: the UAVs that are agents when the task is trained and evaluated (an EnvConfig ``learning``:
+    "followers", vehicle 0 flying the thesis PID on its track, or "all" where vehicle 0 must be flown like the
+    others, e.g. in another UAV's wake)."""
 
     name: str
     scenario: object
@@ -41,6 +44,11 @@ class Task:
     metrics: Callable | None = None
     description: str = ""
     test_randomisation: dict = field(default_factory=dict)
+    learning: str = "followers"
+
+    def __post_init__(self) -> None:
+        if self.learning not in ("followers", "all"):
+            raise ValueError(f"Task.learning must be 'followers' or 'all', got {self.learning!r}")
 
     @property
     def scenario_name(self) -> str:
@@ -102,6 +110,13 @@ def task_for_scenario(scenario) -> Task | None:
         if isinstance(scenario, str) and t.scenario_name == scenario:
             return t
     return None
+
+
+def task_learning(scenario) -> str:
+    """Who learns when the task flown on ``scenario`` (a name) is trained or evaluated: its
+    :attr:`Task.learning`; "followers" for a scenario no task poses."""
+    t = task_for_scenario(scenario)
+    return t.learning if t is not None else "followers"
 
 
 def gym_ids() -> dict[str, tuple[str, int]]:

@@ -37,7 +37,7 @@ def eval_env_config(scenario: str, action_mode: str, *, turbulence_sigma_mps: fl
     task preset (:mod:`formation_env.tasks`: ``wake_surfing``) keeps its preset's randomisation and
     reward, with the benefit on, at ``turbulence_sigma_mps`` (None: the preset's level)."""
     from formation_env.envs.config import EnvConfig, Randomisation
-    from formation_env.tasks import task_for_scenario, task_options
+    from formation_env.tasks import task_for_scenario, task_learning, task_options
 
     if turbulence_field is None:
         turbulence_field = EnvConfig.turbulence_field  # the dataclass default
@@ -48,7 +48,7 @@ def eval_env_config(scenario: str, action_mode: str, *, turbulence_sigma_mps: fl
             rnd = dataclasses.replace(rnd, turbulence_sigma_mps=turbulence_sigma_mps)
         task.pop("action_mode", None)
         task["compute_benefit"] = True
-        return EnvConfig(scenario=scenario, learning="followers", action_mode=action_mode, wake=wake,
+        return EnvConfig(scenario=scenario, learning=task_learning(scenario), action_mode=action_mode, wake=wake,
                          control_hz=control_hz, duration_s=duration_s, turbulence_field=turbulence_field,
                          randomisation=rnd, **task)
     if turbulence_sigma_mps is None:
@@ -57,7 +57,7 @@ def eval_env_config(scenario: str, action_mode: str, *, turbulence_sigma_mps: fl
     extra = dict(t.test_randomisation) if t is not None else {}
     # a task judged by its harvest (close_formation) always computes the saving its metric is made of
     compute_benefit = compute_benefit or (t is not None and t.reference is not None)
-    return EnvConfig(scenario=scenario, learning="followers", action_mode=action_mode, wake=wake, control_hz=control_hz,
+    return EnvConfig(scenario=scenario, learning=task_learning(scenario), action_mode=action_mode, wake=wake, control_hz=control_hz,
                      compute_benefit=compute_benefit, duration_s=duration_s, turbulence_field=turbulence_field,
                      randomisation=Randomisation(turbulence_sigma_mps=turbulence_sigma_mps, **extra))
 
@@ -248,6 +248,7 @@ def run_episodes(policy, config, seeds: Sequence[int], *, keep_series: bool = Fa
             fe = final_err[:n, i]
             ok = not (m["collision"] or m["crashed"]) and n >= round(sim.duration_s * config.control_hz)
             window = t[:n] > t[n - 1] - SUCCESS_WINDOW_S
+            fe = fe[:, [j for j, v in enumerate(agents) if v != 0]]  # the followers (vehicle 0 has no slot)
             m["reconfig_success"] = bool(ok and np.all(fe[window] < SPAN_M))
             outside = np.nonzero(np.any(fe >= SPAN_M, axis=1))[0]
             if not ok or (len(outside) and outside[-1] == n - 1):

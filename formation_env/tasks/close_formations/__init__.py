@@ -70,3 +70,5 @@ TASKS = {name: register_task(Task(name, SCENARIOS[name], gym_id, 1, baselines=("
                                   # off its slot, so that calm-air test episodes differ
                                   test_randomisation={"initial_offset_m": 0.3}))
          for name, gym_id, _ in _DEFS}
+
+from . import rotation  # noqa: E402,F401  (registers vee_rotation, built on vee5's optimum)
