@@ -3,7 +3,7 @@ output directory holds ``levels.json`` and one ``sigma_<level>/results.json`` pe
 ``results.json``): per level the
 summaries of every policy (ablated copies included), the paired comparisons, and per-episode columns of the
 quantities close formation is judged by for the controllers themselves (harvest ratio, slot-frame RMS errors,
-smallest separation, collision, episode length: enough to recompute their intervals and paired differences).
+smallest separation, collision, episode length, and a moving-slot task's success and settling time: enough to recompute their intervals and paired differences).
 The per-decision series and the ablated copies' episodes stay out (the full results are ~30 MB).
 
     python -m train.publish.levels_record RESULTS_DIR OUT.json [--command "..."] [--overwrite]
@@ -20,6 +20,8 @@ __all__ = ["EPISODE_KEYS", "levels_record", "main"]
 
 EPISODE_KEYS = ("seed", "duration_s", "harvest_ratio", "rms_along_track_m", "rms_lateral_m", "rms_vertical_m",
                 "min_separation_m", "collision", "formation_saving")
+# kept where the task has them (a moving-slot task: reconfiguration, vee_rotation)
+OPTIONAL_EPISODE_KEYS = ("reconfig_success", "reconfig_time_s")
 
 
 def _round(v):
@@ -45,7 +47,9 @@ def levels_record(results_dir: str | Path, *, command: str | None = None) -> dic
             "n_episodes": len(rep["seeds"]),
             "summaries": {p: {k: v for k, v in x["summary"].items() if k != "wall_s"} for p, x in rep["policies"].items()},
             "comparisons": rep.get("comparisons", {}),
-            "episodes": {p: {k: [_round(e.get(k)) for e in x["episodes"]] for k in EPISODE_KEYS}
+            "episodes": {p: {k: [_round(e.get(k)) for e in x["episodes"]]
+                             for k in EPISODE_KEYS + tuple(k for k in OPTIONAL_EPISODE_KEYS
+                                                           if any(k in e for e in x["episodes"]))}
                          for p, x in rep["policies"].items() if "-without-" not in p},
         }
     md = src / "levels.md"
