@@ -57,7 +57,9 @@ _POLICY_KWARGS = {"net_arch", "log_std_init", "activation_fn", "ortho_init", "sq
 
 MAX_TIMESTEPS = 10**9  # as the CLI's --steps (formation_env.cli._args.MAX_TRAIN_STEPS; a test holds them equal)
 ACTIVATIONS = ("tanh", "relu", "elu", "leaky_relu")  # policy_kwargs.activation_fn (train/sb3/train.py maps them)
-POLICIES = ("MlpPolicy",)  # the vector envs' observations are flat Boxes
+# the vector envs' observations are flat Boxes; CentralCriticPolicy (PPO only): MAPPO's centralised critic on the
+# agent-specific global state, the actor on the agent's own observation (train/sb3/central_critic.py)
+POLICIES = ("MlpPolicy", "CentralCriticPolicy")
 
 #: hyperparameter -> (kind, min, max, what): kind "int", "float", "bool", "float?" (None allowed); min and
 #: max inclusive, except a float min marked exclusive by being in _EXCLUSIVE_MIN. "ent_coef", "target_entropy"
@@ -262,6 +264,8 @@ class TrainConfig:
             raise ValueError(f"torch_threads must be in [1, 1024], got {self.torch_threads}")
         if not isinstance(self.policy, str) or self.policy not in POLICIES:
             raise ValueError(f"policy must be one of {POLICIES} (the envs' observations are flat), got {self.policy!r}")
+        if self.policy == "CentralCriticPolicy" and self.algo != "ppo":
+            raise ValueError(f"policy CentralCriticPolicy (MAPPO's centralised critic) needs algo ppo, got {self.algo!r}")
         for name in ("algo_kwargs", "policy_kwargs", "env_kwargs"):
             if not isinstance(getattr(self, name), dict):
                 label = "hyperparameters" if name == "algo_kwargs" else name

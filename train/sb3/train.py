@@ -86,7 +86,12 @@ def build_model(cfg: TrainConfig, env):
 
             base = NormalActionNoise(np.zeros(4), float(noise) * np.ones(4))
             kw["action_noise"] = VectorizedActionNoise(base, env.num_envs) if env.num_envs > 1 else base
-    return cls(cfg.policy, env, policy_kwargs=_policy_kwargs(cfg), seed=cfg.seed, device="cpu", verbose=0, **kw)
+    policy, pkw = cfg.policy, _policy_kwargs(cfg)
+    if policy == "CentralCriticPolicy":  # MAPPO: the env appends the global state, the actor reads the own part
+        from .central_critic import CentralCriticPolicy
+
+        policy, pkw = CentralCriticPolicy, {**pkw, "local_dim": int(env.local_dim)}  # GlobalStateVecEnv's
+    return cls(policy, env, policy_kwargs=pkw, seed=cfg.seed, device="cpu", verbose=0, **kw)
 
 
 def make_train_env(cfg: TrainConfig, seed: int):
@@ -95,6 +100,10 @@ def make_train_env(cfg: TrainConfig, seed: int):
     from formation_env.envs import FormationVecEnv
 
     env = FormationVecEnv(cfg.n_formations, make_env_config(cfg), seed=seed)
+    if cfg.policy == "CentralCriticPolicy":  # MAPPO: every row gets its formation's agent-specific global state
+        from .central_critic import GlobalStateVecEnv
+
+        env = GlobalStateVecEnv(env, env.batch.agents_per_formation)
     if cfg.reward_scale == 1.0:
         return env
 
