@@ -33,3 +33,34 @@ def test_train_reconfiguration_smoke(tmp_path, tiny):
     ev = json.loads((tmp_path / "r" / "evaluations.json").read_text())
     assert "reconfig_success_rate" in ev[0]
     assert s["num_timesteps"] == 128
+
+
+def test_init_policy_starts_a_run_from_another_runs_parameters(tmp_path, tiny):
+    """``init_policy`` (fine-tuning): the new model starts with the given zip's policy parameters exactly; a zip
+    whose sizes differ, or a missing file, is one clear error."""
+    import torch
+
+    from train.sb3.config import TrainConfig
+    from train.sb3.train import build_model, make_train_env
+
+    train(scenario="formation_keeping", algo="ppo", action_mode="setpoints", seed=1, steps=128,
+          out_dir=tmp_path / "a", overrides=tiny("ppo"), progress_bar=False, log=lambda m: None)
+    src = str(tmp_path / "a" / "final_model.zip")
+    params = {**tiny("ppo"), "n_timesteps": 64, "init_policy": src}
+    algo_keys = {k: params.pop(k) for k in ("n_steps", "batch_size", "n_epochs")}
+    cfg = TrainConfig(scenario="formation_keeping", algo="ppo", action_mode="setpoints", seed=5,
+                      algo_kwargs=algo_keys, **{k: v for k, v in params.items() if k != "env_kwargs"},
+                      env_kwargs=params["env_kwargs"])
+    model = build_model(cfg, make_train_env(cfg, 5))
+    from stable_baselines3 import PPO
+
+    ref = PPO.load(src, device="cpu").policy.state_dict()
+    for k, v in model.policy.state_dict().items():
+        assert torch.equal(v, ref[k]), k
+    with pytest.raises(ValueError, match="init_policy"):
+        TrainConfig(scenario="formation_keeping", algo="ppo", action_mode="setpoints", seed=0, n_timesteps=64,
+                    init_policy=str(tmp_path / "missing.zip"))
+    wide = {**tiny("ppo"), "init_policy": src, "policy_kwargs": {"net_arch": [8, 8]}}
+    with pytest.raises(ValueError, match="does not fit"):
+        train(scenario="formation_keeping", algo="ppo", action_mode="setpoints", seed=0, steps=64,
+              out_dir=tmp_path / "b", overrides=wide, progress_bar=False, log=lambda m: None)

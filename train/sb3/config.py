@@ -41,7 +41,7 @@ __all__ = ["ALGOS", "TrainConfig", "load_hyperparams", "make_env_config"]
 ALGOS = ("ppo", "sac", "td3")
 
 _TRAIN_KEYS = {"n_timesteps", "n_formations", "policy", "policy_kwargs", "env_kwargs", "eval_freq",
-               "eval_episodes", "checkpoint_freq", "torch_threads", "reward_scale"}
+               "eval_episodes", "checkpoint_freq", "torch_threads", "reward_scale", "init_policy"}
 _ALGO_KEYS = {
     "ppo": {"learning_rate", "n_steps", "batch_size", "n_epochs", "gamma", "gae_lambda", "clip_range",
             "clip_range_vf", "normalize_advantage", "ent_coef", "vf_coef", "max_grad_norm", "use_sde",
@@ -223,6 +223,9 @@ class TrainConfig:
     checkpoint_freq: int = 100_000
     torch_threads: int = 1
     reward_scale: float = 1.0
+    # an SB3 zip of the same algorithm and policy whose parameters start the run (fine-tuning, e.g. vee_rotation
+    # from a vee5 policy); None: a fresh initialisation
+    init_policy: str | None = None
 
     def __post_init__(self) -> None:
         from formation_env.scenarios import scenario_names
@@ -257,6 +260,9 @@ class TrainConfig:
                 raise ValueError(f"{name} must be >= 0 (0: off), got {getattr(self, name)}")
         if not 1 <= self.eval_episodes <= 10_000:
             raise ValueError(f"eval_episodes must be in [1, 10000], got {self.eval_episodes}")
+        if self.init_policy is not None and (not isinstance(self.init_policy, str) or not self.init_policy.endswith(".zip")
+                                             or not Path(self.init_policy).is_file()):
+            raise ValueError(f"init_policy must be None or the path of an existing SB3 .zip, got {self.init_policy!r}")
         if isinstance(self.reward_scale, bool) or not isinstance(self.reward_scale, (int, float)) \
                 or not math.isfinite(self.reward_scale) or not 0 < self.reward_scale <= 1e3:
             raise ValueError(f"reward_scale must be a finite number > 0 (and <= 1000), got {self.reward_scale!r}")

@@ -91,7 +91,14 @@ def build_model(cfg: TrainConfig, env):
         from .central_critic import CentralCriticPolicy
 
         policy, pkw = CentralCriticPolicy, {**pkw, "local_dim": int(env.local_dim)}  # GlobalStateVecEnv's
-    return cls(policy, env, policy_kwargs=pkw, seed=cfg.seed, device="cpu", verbose=0, **kw)
+    model = cls(policy, env, policy_kwargs=pkw, seed=cfg.seed, device="cpu", verbose=0, **kw)
+    if cfg.init_policy is not None:  # fine-tuning: start from another run's policy (same sizes)
+        try:
+            model.set_parameters(cfg.init_policy, exact_match=True, device="cpu")
+        except Exception as exc:  # noqa: BLE001 - one clear error naming the file
+            raise ValueError(f"init_policy {cfg.init_policy!r} does not fit this run's {cfg.algo} {cfg.policy} "
+                             f"(observation, action or network sizes differ): {exc}") from None
+    return model
 
 
 def make_train_env(cfg: TrainConfig, seed: int):
