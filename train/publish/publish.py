@@ -22,10 +22,16 @@ POLICIES = Path(__file__).resolve().parents[1] / "policies"
 
 
 def publish(run_dir: str | Path, name: str, *, eval_json: str | Path | None = None, wall_s: float | None = None,
-            stopped_at: int | None = None, note: str | None = None) -> Path:
+            stopped_at: int | None = None, note: str | None = None, model: str = "best") -> Path:
+    """``model`` "best" (the validation's choice) or "final" (the last model, with the last validation: for a run
+    none of whose validations was free of collisions, where the selection rule has no best; say so in ``note``)."""
+    if model not in ("best", "final"):
+        raise ValueError(f"publish: model must be 'best' or 'final', got {model!r}")
     run = Path(run_dir)
     cfg = yaml.safe_load((run / "config.yaml").read_text())
-    best = json.loads((run / "best_model.json").read_text())
+    best = json.loads((run / f"{model}_model.json").read_text())
+    if model == "final":
+        best["validation"] = json.loads((run / "evaluations.json").read_text())[-1]
     c = cfg["config"]
     meta = {
         "env": {k: best[k] for k in ("algo", "scenario", "action_mode", "control_hz")},
@@ -44,7 +50,7 @@ def publish(run_dir: str | Path, name: str, *, eval_json: str | Path | None = No
                               "summaries": {n: r["summary"] for n, r in rep["policies"].items()}}
     else:
         meta["evaluation"] = None
-    atomic_write(POLICIES / f"{name}.zip", lambda p: shutil.copyfile(run / "best_model.zip", p))
+    atomic_write(POLICIES / f"{name}.zip", lambda p: shutil.copyfile(run / f"{model}_model.zip", p))
     atomic_write_json(POLICIES / f"{name}.json", meta)
     atomic_write(POLICIES / f"{name}_curve.csv", lambda p: shutil.copyfile(run / "curve.csv", p))
     atomic_write(POLICIES / f"{name}_evaluations.json", lambda p: shutil.copyfile(run / "evaluations.json", p))
@@ -89,8 +95,10 @@ def main() -> None:
     ap.add_argument("--wall-s", type=float, default=None)
     ap.add_argument("--stopped-at", type=int, default=None)
     ap.add_argument("--note", default=None)
+    ap.add_argument("--model", choices=("best", "final"), default="best")
     a = ap.parse_args()
-    print(publish(a.run_dir, a.name, eval_json=a.eval, wall_s=a.wall_s, stopped_at=a.stopped_at, note=a.note))
+    print(publish(a.run_dir, a.name, eval_json=a.eval, wall_s=a.wall_s, stopped_at=a.stopped_at, note=a.note,
+                  model=a.model))
 
 
 if __name__ == "__main__":
