@@ -108,3 +108,32 @@ def test_report_committed_checks_every_output_before_evaluating(tmp_path, monkey
     assert (pol / "formation_keeping_ppo_setpoints_evaluation.json").read_text() != old
     assert (fig / "eval_formation_keeping_slot_error.png").read_bytes() == b"\x89PNG fake"
     assert not (tmp_path / "eval" / "policies").exists()
+
+
+def test_publish_best_or_final_model(tmp_path, monkeypatch):
+    """``model="best"`` copies the validation's choice with its validation; ``"final"`` the last model with the
+    last validation (a run none of whose validations was collision-free); anything else is refused."""
+    import yaml
+
+    out = tmp_path / "policies"
+    out.mkdir()
+    monkeypatch.setattr(publish, "POLICIES", out)
+    run = tmp_path / "run"
+    run.mkdir()
+    (run / "config.yaml").write_text(yaml.safe_dump({"command": "cmd", "config": {"seed": 3}}))
+    env = {"algo": "ppo", "scenario": "vee5", "action_mode": "setpoints", "control_hz": 10.0}
+    (run / "best_model.json").write_text(json.dumps({**env, "num_timesteps": 100, "validation": {"score": -0.5}}))
+    (run / "final_model.json").write_text(json.dumps({**env, "num_timesteps": 200}))
+    (run / "evaluations.json").write_text(json.dumps([{"num_timesteps": 100, "score": -0.5},
+                                                      {"num_timesteps": 200, "score": float("inf")}]))
+    for name, body in (("best_model.zip", b"best"), ("final_model.zip", b"final"), ("curve.csv", b"s\n")):
+        (run / name).write_bytes(body)
+    publish.publish(run, "a_seed3")
+    assert (out / "a_seed3.zip").read_bytes() == b"best"
+    assert json.loads((out / "a_seed3.json").read_text())["num_timesteps"] == 100
+    publish.publish(run, "b_seed3", model="final", note="no collision-free validation")
+    meta = json.loads((out / "b_seed3.json").read_text())
+    assert (out / "b_seed3.zip").read_bytes() == b"final"
+    assert meta["num_timesteps"] == 200 and meta["validation"]["num_timesteps"] == 200 and meta["note"]
+    with pytest.raises(ValueError, match="model"):
+        publish.publish(run, "c_seed3", model="last")
