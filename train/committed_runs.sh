@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# The exact commands behind the committed policies in train/policies/ (issues 13, 16, 24 and 25 (vee5: run without
+# The exact commands behind the committed policies in train/policies/ (issues 13, 16, 24 and 25 (vee5 and vee5_mappo: run without
 # NUMBA_NUM_THREADS=1, two at a time); the wake_surfing_random_leader
 # seed 0 ran with --config runs/ws24/variant.yml, whose section equals ppo.yml's wake_surfing_random_leader: the resolved
 # hyperparameters are identical): PPO, setpoints actions,
@@ -21,6 +21,7 @@ jobs_list() {
     echo "wake_surfing 2000000 $seed"
     echo "wake_surfing_random_leader 2000000 $seed"
     echo "vee5 2000000 $seed"
+    echo "vee5_mappo 2000000 $seed"   # vee5 with train/hyperparams/mappo.yml (the centralised critic)
   done
 }
 # ONLY="scenario:seed scenario:seed ..." runs a subset (e.g. to redo one run)
@@ -33,9 +34,10 @@ selected() {
 
 run_one() {
   local scenario=$1 steps=$2 seed=$3
-  local out="$RUNS/${scenario}_seed${seed}"
+  local out="$RUNS/${scenario}_seed${seed}" extra=()
+  if [ "$scenario" = vee5_mappo ]; then scenario=vee5; extra=(--config train/hyperparams/mappo.yml); fi
   NUMBA_NUM_THREADS=1 "$FE" train --scenario "$scenario" --algo ppo --action-mode setpoints --steps "$steps" \
-    --seed "$seed" --out "$out" --no-progress-bar > "$RUNS/${scenario}_seed${seed}.log" 2>&1
+    --seed "$seed" "${extra[@]}" --out "$out" --no-progress-bar > "$out.log" 2>&1
 }
 export -f run_one
 export RUNS FE
@@ -49,4 +51,16 @@ for scenario in formation_keeping close_formation reconfiguration wake_surfing w
     wall=$("$PY" -c "import json,sys; print(json.load(open(sys.argv[1]))['wall_s'])" "$run/summary.json")
     "$PY" -m train.publish "$run" "${scenario}_ppo_setpoints_seed${seed}" --wall-s "$wall"
   done
+done
+# MAPPO: a run none of whose validations was free of collisions has no best model; its final model is published
+for seed in 0 1 2; do
+  run="$RUNS/vee5_mappo_seed${seed}"
+  wall=$("$PY" -c "import json,sys; print(json.load(open(sys.argv[1]))['wall_s'])" "$run/summary.json")
+  if "$PY" -c "import json,math,sys; sys.exit(0 if math.isfinite(json.load(open(sys.argv[1]))['validation']['score']) else 1)" \
+      "$run/best_model.json"; then
+    "$PY" -m train.publish "$run" "vee5_mappo_setpoints_seed${seed}" --wall-s "$wall"
+  else
+    "$PY" -m train.publish "$run" "vee5_mappo_setpoints_seed${seed}" --wall-s "$wall" --model final \
+      --note "no validation of this run was free of collisions: the final model is published"
+  fi
 done
