@@ -37,7 +37,7 @@ run_one() {
   local out="$RUNS/${scenario}_seed${seed}" extra=()
   if [ "$scenario" = vee5_mappo ]; then scenario=vee5; extra=(--config train/hyperparams/mappo.yml); fi
   NUMBA_NUM_THREADS=1 "$FE" train --scenario "$scenario" --algo ppo --action-mode setpoints --steps "$steps" \
-    --seed "$seed" "${extra[@]}" --out "$out" --no-progress-bar > "$out.log" 2>&1
+    --seed "$seed" ${extra[@]+"${extra[@]}"} --out "$out" --no-progress-bar > "$out.log" 2>&1
 }
 export -f run_one
 export RUNS FE

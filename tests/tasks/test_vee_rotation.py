@@ -9,14 +9,13 @@ import numpy as np
 import pytest
 
 import formation_env
+from formation_env.constants import AEROSONDE_SPAN_M as SPAN
 from formation_env.scenarios import SlotSchedule, get_scenario
 from formation_env.sim.config import EnvConfig
 from formation_env.sim.params import hold_remaining_decisions
 from formation_env.tasks import get_task
 from formation_env.tasks.close_formations import optimum as opt
 from formation_env.tasks.close_formations.rotation import PHASES_S, rotation_keyframes
-
-SPAN = 2.9
 
 
 def _positions(t):

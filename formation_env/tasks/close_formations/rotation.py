@@ -5,7 +5,7 @@ The formation starts and ends as ``vee5``'s joint induced-drag optimum (:mod:`.o
 rank 1 at s1 = (-2, +-0.89, 0.1) b, rank 2 at s2 = (-4, +-1.82, 0.2) b (x forward, y starboard, z down, from the
 UAV at the apex). After the rotation the starboard rank-1 follower (vehicle 1) is the apex, vehicle 3 its
 starboard rank 1, vehicle 0 its starboard rank 2 (the tired leader at the end of a side), vehicles 2 and 4 keep
-their port slots. Slots are relative to vehicle 0, which flies its track under the thesis PID, so in its frame
+their port slots. Slots are relative to vehicle 0, which flies its own straight track (as an agent, below), so in its frame
 the rotation is the four followers moving forward and to port, past it: with A = -s2 the new apex relative
 to vehicle 0, vehicle 1 ends at A, vehicle 3 at A + s1, vehicle 2 at A + mirror(s1) and vehicle 4 at A +
 mirror(s2). The schedule (:func:`rotation_keyframes`) orders the moves so that no two paths cross and every
