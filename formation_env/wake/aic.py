@@ -94,6 +94,7 @@ def assemble_and_solve(
     x1, x3, bound_dir, chord_dir, trail, vel, rot, pos, origin, airspeed,
     knot_vehicle, knot_surface, surface_core_scale, panel_left_knot, panel_vehicle,
     control_b, normal_b, aic_static, cutoff, aic_core_mode, nu, overlap_core, aic, gamma, r1, inv1, r3, inv3,
+    vcross,
 ):
     """Build the AIC over every panel of every vehicle and solve for the circulations (4.25-4.69).
 
@@ -106,25 +107,40 @@ def assemble_and_solve(
     cutoff), so that overlapping or coincident vehicles keep a well-conditioned AIC; 0: without it.
     A vehicle's own bound and chordwise branches come from ``aic_static`` (see :func:`static_aic`),
     its own legs are plain with the cutoff: the own part is the thesis's exactly.
+
+    ``vcross`` (N, N, 3) or empty (0, 0, 3): when not empty, ``vcross[j, p]`` receives the velocity (NED,
+    per unit circulation) that horseshoe ``p`` of *another* vehicle induces at control point ``j`` (entries
+    of a vehicle's own horseshoes are left unset): the vector whose normal component is the AIC entry, so
+    that the other vehicles' field at the control points is ``sum_p vcross[j, p] gamma[p]`` without
+    evaluating the branches again (:func:`formation_env.wake.kernels.evaluate_one`). The AIC itself is
+    computed exactly as without it (the same dot products, bit for bit).
     """
     n_panels = panel_left_knot.shape[0]
     n_knots = x1.shape[0]
+    store = vcross.shape[0] > 0
     cp = np.empty(3)
     nrm = np.empty(3)
     lw = np.empty(n_knots)  # trailing leg . n
     cw = np.empty(n_knots)  # chordwise branch . n (other vehicles' knots only)
+    lcv = np.empty((n_knots, 3) if store else (0, 3))  # chordwise branch - trailing leg (other vehicles' knots)
     for j in range(n_panels):
         vj = panel_vehicle[j]
         to_ned(rot[vj], pos[vj], control_b[j], cp)
         for i in range(3):
             nrm[i] = rot[vj, 0, i] * normal_b[j, 0] + rot[vj, 1, i] * normal_b[j, 1] + rot[vj, 2, i] * normal_b[j, 2]
         point_to_knots(cp[0], cp[1], cp[2], x1, x3, 0, n_knots, r1, inv1, r3, inv3)
+        rc_surface = -1  # the surface whose core radius rc_s holds (the radius depends on the point and the
+        rc_s = 0.0       # surface only, and a surface's knots are contiguous: once per surface, not per knot)
         for k in range(n_knots):
             src = knot_vehicle[k]
             t = trail[src]
             rc = 0.0
             if aic_core_mode != CORE_NONE and src != vj:
-                rc = core_radius(cp[0], cp[1], cp[2], origin, knot_surface[k], airspeed[src], surface_core_scale, aic_core_mode, nu)
+                if knot_surface[k] != rc_surface:
+                    rc_surface = knot_surface[k]
+                    rc_s = core_radius(cp[0], cp[1], cp[2], origin, rc_surface, airspeed[src], surface_core_scale,
+                                       aic_core_mode, nu)
+                rc = rc_s
             if src != vj:
                 lx, ly, lz = leg_cored(t[0], t[1], t[2], r3[k, 0], r3[k, 1], r3[k, 2], inv3[k], cutoff, rc, overlap_core)
             else:
@@ -134,6 +150,10 @@ def assemble_and_solve(
                 sx, sy, sz = branch_cored(chord_dir[k, 0], chord_dir[k, 1], chord_dir[k, 2], r3[k, 0], r3[k, 1], r3[k, 2],
                                           inv3[k], r1[k, 0], r1[k, 1], r1[k, 2], inv1[k], cutoff, overlap_core)
                 cw[k] = sx * nrm[0] + sy * nrm[1] + sz * nrm[2]
+                if store:
+                    lcv[k, 0] = sx - lx
+                    lcv[k, 1] = sy - ly
+                    lcv[k, 2] = sz - lz
         for p in range(n_panels):
             k = panel_left_knot[p]
             if panel_vehicle[p] == vj:
@@ -143,5 +163,9 @@ def assemble_and_solve(
                                           inv1[k], r1[k + 1, 0], r1[k + 1, 1], r1[k + 1, 2], inv1[k + 1], cutoff,
                                           overlap_core)
                 aic[j, p] = (cw[k] - lw[k]) + bx * nrm[0] + by * nrm[1] + bz * nrm[2] - (cw[k + 1] - lw[k + 1])
+                if store:  # horseshoe p = L-line k + bound - L-line k + 1 (the field's decomposition)
+                    vcross[j, p, 0] = lcv[k, 0] + bx - lcv[k + 1, 0]
+                    vcross[j, p, 1] = lcv[k, 1] + by - lcv[k + 1, 1]
+                    vcross[j, p, 2] = lcv[k, 2] + bz - lcv[k + 1, 2]
         gamma[j] = vel[vj, 0] * nrm[0] + vel[vj, 1] * nrm[1] + vel[vj, 2] * nrm[2]
     lu_solve_inplace(aic, gamma)

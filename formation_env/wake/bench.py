@@ -53,21 +53,31 @@ def ell_flops(model: WakeModel) -> dict:
     run it (the count above, per loop of :func:`~formation_env.wake.aic.assemble_and_solve`,
     :func:`~formation_env.wake.aic.lu_solve_inplace` and :func:`~formation_env.wake.field.field_velocity`);
     posing and the effective-wind sums (O(panels)) are left out. An estimate of the work, not a
-    hardware count: the branch laws' rare paths (inside a core) cost a few flops more."""
+    hardware count: the branch laws' rare paths (inside a core) cost a few flops more.
+
+    Where the field's points and law are the solve's (evaluation at the control points, the viscous core in
+    the AIC: ``shared``, the default), the AIC keeps the other vehicles' branch vectors (3 flops per other
+    knot, 6 per other horseshoe) and the field is their sum weighted by the circulations (6 flops per other
+    horseshoe and point); otherwise the field evaluates its branches again."""
     t, f = model.template, FLOPS
     pv, kv, sv = (np.asarray(x) for x in (t.panel_vehicle, t.knot_vehicle, t.surface_vehicle))
     n, k = len(pv), len(kv)
+    shared = model.eval_points == "control" and model.viscous_aic
     aic = 0
     for j in range(n):
         own_k = int(np.sum(kv == pv[j]))
         own_p = int(np.sum(pv == pv[j]))
         aic += 2 * f["to_ned"] - 3 + f["knot"] * k          # control point and normal to NED, every knot's vectors
         aic += own_k * (f["leg"] + f["dot"])                  # own trailing legs (own bound/chordwise: static)
-        aic += (k - own_k) * (f["core_radius"] + f["leg_cored"] + f["branch_cored"] + 2 * f["dot"])
-        aic += own_p * 3 + (n - own_p) * (f["branch_cored"] + f["dot"] + 4) + 5
+        aic += (k - own_k) * (f["leg_cored"] + f["branch_cored"] + 2 * f["dot"] + 3 * shared)
+        aic += int(np.sum(sv != pv[j])) * f["core_radius"]   # once per other surface (its knots share it)
+        aic += own_p * 3 + (n - own_p) * (f["branch_cored"] + f["dot"] + 4 + 6 * shared) + 5
     lu = int(round(2 * n ** 3 / 3 + 2 * n ** 2))
     field = 0
     for j in range(n):  # each evaluation point, the other vehicles' surfaces
+        if shared:
+            field += 6 * int(np.sum(pv != pv[j]))
+            continue
         field += f["to_ned"]
         for s_ in np.nonzero(sv != pv[j])[0]:
             k0, k1 = int(t.surface_knot_start[s_]), int(t.surface_knot_start[s_ + 1])

@@ -114,7 +114,7 @@ def isolated_circulation_one(wake_alone, v, pos, euler, speed, alpha, beta, gamm
     assemble_and_solve(x1, x3, bound_dir, chord_dir, trail, vel, rot, pos1, origin, sp1, w.knot_vehicle,
                        w.knot_surface, w.surface_core_scale, w.panel_left_knot, w.panel_vehicle, w.control_b, w.normal_b,
                        w.aic_static, w.cutoff_m, w.aic_core_mode, w.kinematic_viscosity, w.overlap_core_m, np.empty((n, n)),
-                       gamma_out, r1, inv1, r3, inv3)
+                       gamma_out, r1, inv1, r3, inv3, np.empty((0, 0, 3)))
     return pos1, eul1, sp1, al1, be1
 
 

@@ -64,21 +64,55 @@ def evaluate_one(
         pos, euler, airspeed, alpha, beta, knot_x1_b, knot_x3_b, knot_vehicle, knot_surface,
         surface_origin_b, surface_vehicle, surface_knot_start)
     aic = np.empty((n_panels, n_panels))
+    # Where the field's law at the evaluation points is the solve's at the control points (the same points,
+    # the viscous core in both), every other-vehicle branch the field needs was already evaluated for the
+    # AIC: keep those vectors and the field is a sum over them (issue 26: each segment-point interaction
+    # evaluated once); otherwise evaluate the field's branches separately.
+    shared = aic_core_mode == core_mode and _same_points(eval_b, control_b)
+    vcross = np.empty((n_panels, n_panels, 3) if shared else (0, 0, 3))
     assemble_and_solve(x1, x3, bound_dir, chord_dir, trail, vel, rot, pos, origin, airspeed, knot_vehicle, knot_surface,
                        surface_core_scale, panel_left_knot, panel_vehicle, control_b, normal_b, aic_static, cutoff,
-                       aic_core_mode, nu, overlap_core, aic, gamma_out, r1, inv1, r3, inv3)
-    pt = np.empty(3)
-    for j in range(n_panels):
-        v = panel_vehicle[j]
-        to_ned(rot[v], pos[v], eval_b[j], pt)
-        wx, wy, wz = field_velocity(pt[0], pt[1], pt[2], v, False, x1, x3, bound_dir, chord_dir, trail, origin,
-                                    airspeed, gamma_out, surface_knot_start, surface_panel_start,
-                                    surface_vehicle, surface_core_scale, cutoff, core_mode, nu, overlap_core,
-                                    r1, inv1, r3, inv3)
-        vpts_out[j, 0] = wx
-        vpts_out[j, 1] = wy
-        vpts_out[j, 2] = wz
+                       aic_core_mode, nu, overlap_core, aic, gamma_out, r1, inv1, r3, inv3, vcross)
+    if shared:
+        for j in range(n_panels):
+            v = panel_vehicle[j]
+            wx = 0.0
+            wy = 0.0
+            wz = 0.0
+            for p in range(n_panels):
+                if panel_vehicle[p] != v:
+                    g = gamma_out[p]
+                    wx += g * vcross[j, p, 0]
+                    wy += g * vcross[j, p, 1]
+                    wz += g * vcross[j, p, 2]
+            vpts_out[j, 0] = wx
+            vpts_out[j, 1] = wy
+            vpts_out[j, 2] = wz
+    else:
+        pt = np.empty(3)
+        for j in range(n_panels):
+            v = panel_vehicle[j]
+            to_ned(rot[v], pos[v], eval_b[j], pt)
+            wx, wy, wz = field_velocity(pt[0], pt[1], pt[2], v, False, x1, x3, bound_dir, chord_dir, trail, origin,
+                                        airspeed, gamma_out, surface_knot_start, surface_panel_start,
+                                        surface_vehicle, surface_core_scale, cutoff, core_mode, nu, overlap_core,
+                                        r1, inv1, r3, inv3)
+            vpts_out[j, 0] = wx
+            vpts_out[j, 1] = wy
+            vpts_out[j, 2] = wz
     effective_wind(rot, vpts_out, grad_w, vehicle_panel_start, wind_ned_out, wind_b_out, omega_b_out, omega_ned_out)
+
+
+@_jit
+def _same_points(a, b):
+    """Whether the (N, 3) point sets ``a`` and ``b`` are equal element by element."""
+    if a.shape[0] != b.shape[0]:
+        return False
+    for j in range(a.shape[0]):
+        for i in range(3):
+            if a[j, i] != b[j, i]:
+                return False
+    return True
 
 
 @_jit

@@ -9,25 +9,41 @@ from formation_env.wake import bench
 from formation_env.wake.model import WakeModel
 
 
-def _flops(n_vehicles, nseg=10):
-    return bench.ell_flops(WakeModel([aerosonde(nseg=nseg)] * n_vehicles))
+def _flops(n_vehicles, nseg=10, **kw):
+    return bench.ell_flops(WakeModel([aerosonde(nseg=nseg)] * n_vehicles, **kw))
+
+
+def test_flop_count_follows_the_loops_shared_field():
+    """The default (evaluation at the control points, viscous AIC): the field is the sum of the AIC's kept
+    branch vectors, 6 flops per other-vehicle horseshoe and point, and the AIC pays 3 per other knot and 6
+    per other horseshoe to keep them."""
+    f = bench.FLOPS
+    one, two, three = _flops(1), _flops(2), _flops(3)
+    assert one["field"] == 0
+    assert two["field"] == 20 * 10 * 6
+    assert three["field"] == 30 * 20 * 6
+    separate = _flops(2, eval_points="quarter_chord")
+    assert two["aic"] - separate["aic"] == 20 * (11 * 3 + 10 * 6)
+    assert separate["field"] > 10 * two["field"]  # what sharing saves
+    assert two["total"] == two["aic"] + two["lu"] + two["field"]
 
 
 def test_flop_count_follows_the_loops():
+    """The field evaluated separately (evaluation at the quarter chord)."""
     f = bench.FLOPS
-    one = _flops(1)
+    one = _flops(1, eval_points="quarter_chord")
     # one vehicle: no other vehicle's field (its 10 evaluation points are only placed in NED), and each of its
     # 10 control points sees its own 11 knots only
     assert one["field"] == 10 * f["to_ned"]
     per_point = 2 * f["to_ned"] - 3 + 11 * f["knot"] + 11 * (f["leg"] + f["dot"]) + 10 * 3 + 5
     assert one["aic"] == 10 * per_point
     assert one["lu"] == round(2 * 10 ** 3 / 3 + 2 * 10 ** 2)
-    two, three = _flops(2), _flops(3)
+    two, three = _flops(2, eval_points="quarter_chord"), _flops(3, eval_points="quarter_chord")
     # the cross-vehicle terms grow with the number of pairs: the field of 3 vehicles is 3x that of 2 (6 ordered
     # pairs against 2), and a finer lattice costs about (nseg ratio)^2 in the AIC
     cross = two["field"] - 20 * f["to_ned"]
     assert three["field"] - 30 * f["to_ned"] == 3 * cross
-    assert _flops(2, nseg=20)["aic"] / two["aic"] == pytest.approx(4.0, rel=0.1)
+    assert _flops(2, nseg=20, eval_points="quarter_chord")["aic"] / two["aic"] == pytest.approx(4.0, rel=0.1)
     assert two["total"] == two["aic"] + two["lu"] + two["field"]
 
 
