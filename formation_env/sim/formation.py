@@ -33,6 +33,7 @@ from ..wake.coupling import COUPLINGS, lift_matched_vehicle
 
 
 __all__ = ["WakeConfig", "ell_state_from_aircraft", "wake_model_for", "wake_vehicle", "resolve_coupling",
+           "resolve_sheet",
            "wing_origin_body"]
 
 
@@ -56,8 +57,13 @@ class WakeConfig:
     # formation_env.wake.converged.span_efficiency_scale: the coarse lattice's 1/nseg bias of the ratio removed);
     # False: the lattice's own ratio (the thesis, and every default; docs/ell.md "Converged saving")
     span_correction: bool = False
+    # the ELL's sheet law (WakeModel sheet: the other vehicles' trailing legs as a continuous sheet near their
+    # wake plane; False the thesis's discrete legs); None: the scenario's wake_sheet (resolve_sheet)
+    sheet: bool | None = None
 
     def __post_init__(self) -> None:
+        if self.sheet is not None and not isinstance(self.sheet, bool):
+            raise ValueError(f"WakeConfig: sheet must be None, True or False, got {self.sheet!r}")
         if not isinstance(self.span_correction, bool):
             raise ValueError(f"WakeConfig: span_correction must be True or False, got {self.span_correction!r}")
         if self.coupling is not None and self.coupling not in COUPLINGS:
@@ -100,6 +106,15 @@ def resolve_coupling(wake: WakeConfig, config=None, scenario=None) -> str:
     return "effective_wind"
 
 
+def resolve_sheet(wake: WakeConfig, scenario=None) -> bool:
+    """Whether a simulation's ELL takes the sheet law (:class:`WakeModel`'s ``sheet``): ``wake.sheet`` if
+    set, else ``scenario.wake_sheet``, else False (the thesis)."""
+    for source in (wake.sheet, getattr(scenario, "wake_sheet", None)):
+        if source is not None:
+            return bool(source)
+    return False
+
+
 def wake_vehicle(wake: WakeConfig, coupling: str | None = None) -> Vehicle:
     """The Aerosonde the ELL models as ``wake`` configures it: Table 6.1's wing (and tailplane), with the
     ``load_weighted`` coupling lift-matched (its wing at the 6-DOF's zero-lift angle,
@@ -111,10 +126,11 @@ def wake_vehicle(wake: WakeConfig, coupling: str | None = None) -> Vehicle:
     return lift_matched_vehicle(vehicle, AEROSONDE) if coupling == "load_weighted" else vehicle
 
 
-def wake_model_for(wake: WakeConfig, n_vehicles: int, coupling: str | None = None) -> WakeModel | None:
+def wake_model_for(wake: WakeConfig, n_vehicles: int, coupling: str | None = None,
+                   sheet: bool | None = None) -> WakeModel | None:
     """The joint ELL model of ``n_vehicles`` Aerosondes as ``wake`` configures it (None: wake off or one UAV);
     ``coupling`` as :func:`wake_vehicle`'s; with ``wake.span_correction`` its ``saving_scale`` is the vehicle's
-    :func:`~formation_env.wake.converged.span_efficiency_scale`."""
+    :func:`~formation_env.wake.converged.span_efficiency_scale`; ``sheet`` None: :func:`resolve_sheet` of ``wake``."""
     if not wake.enabled or n_vehicles < 2:
         return None
     vehicle = wake_vehicle(wake, coupling)
@@ -124,4 +140,5 @@ def wake_model_for(wake: WakeConfig, n_vehicles: int, coupling: str | None = Non
 
         scale = span_efficiency_scale(vehicle)
     return WakeModel([vehicle] * n_vehicles, core=wake.core, eval_points=wake.eval_points, rotational=wake.rotational,
-                     viscous_aic=wake.viscous_aic, saving_scale=scale)
+                     viscous_aic=wake.viscous_aic, saving_scale=scale,
+                     sheet=resolve_sheet(wake) if sheet is None else bool(sheet))

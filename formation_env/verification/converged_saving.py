@@ -9,10 +9,10 @@ alpha), the ELL is the energy tasks' lift-matched wing (:class:`~formation_env.s
 :func:`formation_env.wake.coupling.coupled_wind` (both couplings, the follower's, NED).
 
 ``python -m formation_env.verification.converged_saving`` prints the table of docs/ell.md for the lattices
-this checkout has (nseg 10 with and without the span correction, nseg 40 and 160 against nseg 80). The sheet
-law's rows need ``docs/patches/ell_sheet_law.patch`` applied (``follower_maps(WakeConfig(sheet=True,
-span_correction=True))``), the residual table's :func:`residual_table_errors` with that base (e.g.
-``conditions=({}, {"roll_deg": 2.0}, {"x_b": -2.5})``).
+this checkout has (nseg 10 with and without the span correction, with the sheet law, nseg 40 and 160 against
+nseg 80); the residual table's :func:`residual_table_errors` with the sheet law as its base (e.g.
+``residual_table_errors(WakeConfig(sheet=True, span_correction=True), conditions=({}, {"roll_deg": 2.0},
+{"x_b": -2.5}))``).
 """
 
 from __future__ import annotations
@@ -140,6 +140,8 @@ def main() -> None:
 
     reference = follower_maps(WakeConfig(nseg=80))
     cases = {"nseg 10": WakeConfig(), "nseg 10 + span correction": WakeConfig(span_correction=True),
+             "nseg 10, sheet law": WakeConfig(sheet=True),
+             "nseg 10, sheet law + span corr.": WakeConfig(sheet=True, span_correction=True),
              "nseg 40": WakeConfig(nseg=40), "nseg 160": WakeConfig(nseg=160)}
     print("against nseg 80; % of the reference's peak (saving) or largest |component| (winds y / z)")
     for label, cfg in cases.items():

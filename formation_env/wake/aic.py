@@ -7,7 +7,7 @@ from __future__ import annotations
 import numba as nb
 import numpy as np
 
-from .biot_savart import CORE_NONE, branch, branch_cored, core_radius, leg, leg_cored, point_to_knots
+from .biot_savart import CORE_NONE, branch, branch_cored, core_radius, leg, leg_cored, leg_sheet, point_to_knots
 from .posing import branch_directions, to_ned
 
 __all__ = ["lu_solve_inplace", "static_aic", "assemble_and_solve"]
@@ -94,7 +94,7 @@ def assemble_and_solve(
     x1, x3, bound_dir, chord_dir, trail, vel, rot, pos, origin, airspeed,
     knot_vehicle, knot_surface, surface_core_scale, panel_left_knot, panel_vehicle,
     control_b, normal_b, aic_static, cutoff, aic_core_mode, nu, overlap_core, aic, gamma, r1, inv1, r3, inv3,
-    vcross,
+    vcross, sheet=None,
 ):
     """Build the AIC over every panel of every vehicle and solve for the circulations (4.25-4.69).
 
@@ -129,6 +129,11 @@ def assemble_and_solve(
         for i in range(3):
             nrm[i] = rot[vj, 0, i] * normal_b[j, 0] + rot[vj, 1, i] * normal_b[j, 1] + rot[vj, 2, i] * normal_b[j, 2]
         point_to_knots(cp[0], cp[1], cp[2], x1, x3, 0, n_knots, r1, inv1, r3, inv3)
+        recv_w = 0.0
+        if sheet is not None:
+            kj = panel_left_knot[j]
+            recv_w = np.sqrt((x1[kj + 1, 0] - x1[kj, 0]) ** 2 + (x1[kj + 1, 1] - x1[kj, 1]) ** 2
+                             + (x1[kj + 1, 2] - x1[kj, 2]) ** 2)
         rc_surface = -1  # the surface whose core radius rc_s holds (the radius depends on the point and the
         rc_s = 0.0       # surface only, and a surface's knots are contiguous: once per surface, not per knot)
         for k in range(n_knots):
@@ -142,7 +147,12 @@ def assemble_and_solve(
                                        aic_core_mode, nu)
                 rc = rc_s
             if src != vj:
-                lx, ly, lz = leg_cored(t[0], t[1], t[2], r3[k, 0], r3[k, 1], r3[k, 2], inv3[k], cutoff, rc, overlap_core)
+                if sheet is not None:
+                    lx, ly, lz = leg_sheet(t[0], t[1], t[2], r3[k, 0], r3[k, 1], r3[k, 2], inv3[k], cutoff, rc, overlap_core,
+                                           x3, k, k > 0 and knot_surface[k - 1] == knot_surface[k],
+                                           k < n_knots - 1 and knot_surface[k + 1] == knot_surface[k], recv_w)
+                else:
+                    lx, ly, lz = leg_cored(t[0], t[1], t[2], r3[k, 0], r3[k, 1], r3[k, 2], inv3[k], cutoff, rc, overlap_core)
             else:
                 lx, ly, lz = leg(t[0], t[1], t[2], r3[k, 0], r3[k, 1], r3[k, 2], inv3[k], cutoff, rc)
             lw[k] = lx * nrm[0] + ly * nrm[1] + lz * nrm[2]

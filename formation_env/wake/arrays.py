@@ -9,7 +9,7 @@ import numpy as np
 
 import numba as nb
 
-from .kernels import CORE_NONE, evaluate_one
+from .kernels import CORE_NONE, SHEET_ON, evaluate_one
 
 __all__ = ["WakeArrays", "wake_arrays", "evaluate_formation"]
 
@@ -39,6 +39,8 @@ class WakeArrays(NamedTuple):
     aic_core_mode: int
     kinematic_viscosity: float
     overlap_core_m: float  # minimum core of the other vehicles' branches, m (WakeModel.overlap_core_m)
+    sheet: float | None  # SHEET_ON: the other vehicles' trailing legs take the sheet law (WakeModel.sheet); None: the
+    #                      thesis (a switch by type: each compiles its own kernels, the thesis's without the law)
     wing_origin_body: np.ndarray  # (3,) wing root quarter chord relative to the CG, body axes, m
     n_panels: int
     saving_scale: float  # factor on the induced-drag saving (WakeModel.saving_scale; 1.0: the thesis)
@@ -57,6 +59,7 @@ def wake_arrays(model, wing_origin_body) -> WakeArrays:
         grad_w=model.grad_w, vehicle_panel_start=t.vehicle_panel_start, cutoff_m=float(t.cutoff_m),
         core_mode=int(model.core_mode), aic_core_mode=int(model.core_mode if model.viscous_aic else CORE_NONE),
         kinematic_viscosity=float(model.kinematic_viscosity), overlap_core_m=float(model.overlap_core_m),
+        sheet=SHEET_ON if model.sheet else None,
         wing_origin_body=np.ascontiguousarray(wing_origin_body, dtype=float), n_panels=int(model.n_panels),
         saving_scale=float(getattr(model, "saving_scale", 1.0)))
 
@@ -71,4 +74,4 @@ def evaluate_formation(w, pos, euler, airspeed, alpha, beta, gamma_out, vpts_out
                  w.surface_core_scale, w.panel_left_knot, w.panel_vehicle, w.control_b, w.normal_b, w.aic_static,
                  w.eval_b, w.grad_w, w.vehicle_panel_start, w.cutoff_m, w.core_mode, w.aic_core_mode,
                  w.kinematic_viscosity, gamma_out, vpts_out, wind_ned_out, wind_b_out, omega_b_out, omega_ned_out,
-                 w.overlap_core_m)
+                 w.overlap_core_m, w.sheet)

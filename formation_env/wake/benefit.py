@@ -82,7 +82,7 @@ def induced_drag_one(wake, gamma, pos, euler, speed, alpha, beta, out_drag, air_
         ex, ey, ez = field_velocity(mx, my, mz, v, False, x1, x3, bound_dir, chord_dir, trail, origin, speed, gamma,
                                     wake.surface_knot_start, wake.surface_panel_start, wake.surface_vehicle,
                                     wake.surface_core_scale, wake.cutoff_m, wake.core_mode, wake.kinematic_viscosity,
-                                    wake.overlap_core_m, r1, inv1, r3, inv3)
+                                    wake.overlap_core_m, r1, inv1, r3, inv3, wake.sheet, np.sqrt(lx * lx + ly * ly + lz * lz))
         _add_kutta_joukowski(f, v, air_density * gamma[j], vel[v, 0], vel[v, 1], vel[v, 2], ox, oy, oz, ex, ey, ez,
                              lx, ly, lz)
     for v in range(nv):
@@ -114,7 +114,7 @@ def isolated_circulation_one(wake_alone, v, pos, euler, speed, alpha, beta, gamm
     assemble_and_solve(x1, x3, bound_dir, chord_dir, trail, vel, rot, pos1, origin, sp1, w.knot_vehicle,
                        w.knot_surface, w.surface_core_scale, w.panel_left_knot, w.panel_vehicle, w.control_b, w.normal_b,
                        w.aic_static, w.cutoff_m, w.aic_core_mode, w.kinematic_viscosity, w.overlap_core_m, np.empty((n, n)),
-                       gamma_out, r1, inv1, r3, inv3, np.empty((0, 0, 3)))
+                       gamma_out, r1, inv1, r3, inv3, np.empty((0, 0, 3)), w.sheet)
     return pos1, eul1, sp1, al1, be1
 
 
@@ -239,7 +239,8 @@ def induced_drags_one(wake, wake_alone, pos, euler, speed, alpha, beta, gamma_fo
         ex, ey, ez = field_velocity(mx, my, mz, v, False, x1, x3, bound_dir, chord_dir, trail, origin, speed,
                                     gamma_formation, wake.surface_knot_start, wake.surface_panel_start,
                                     wake.surface_vehicle, wake.surface_core_scale, wake.cutoff_m, wake.core_mode,
-                                    wake.kinematic_viscosity, wake.overlap_core_m, r1, inv1, r3, inv3)
+                                    wake.kinematic_viscosity, wake.overlap_core_m, r1, inv1, r3, inv3, wake.sheet,
+                                    np.sqrt(lx * lx + ly * ly + lz * lz))
         _add_kutta_joukowski(f, v, air_density * gamma_formation[j], vel[v, 0], vel[v, 1], vel[v, 2], ox, oy, oz,
                              ex, ey, ez, lx, ly, lz)
         # alone: no other vehicle (the separate solve adds the empty others' field, 0.0, as here)

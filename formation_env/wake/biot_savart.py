@@ -14,7 +14,8 @@ import numpy as np
 
 __all__ = ["branch", "branch_cored", "leg", "leg_cored", "core_radius", "point_to_knots", "segment_velocity", "leg_velocity",
            "FOUR_PI", "CORE_NONE", "CORE_LAMB_OSEEN", "CORE_KURYLOWICH", "LAMB_OSEEN_C", "KURYLOWICH_C",
-           "OVERLAP_CORE_CHORD_FRACTION", "CORE_PEAK"]
+           "OVERLAP_CORE_CHORD_FRACTION", "CORE_PEAK", "leg_sheet", "SHEET_BLEND_INNER", "SHEET_ON",
+           "SHEET_BLEND_OUTER"]
 
 FOUR_PI = 4.0 * math.pi
 CORE_NONE, CORE_LAMB_OSEEN, CORE_KURYLOWICH = 0, 1, 2
@@ -31,6 +32,17 @@ KURYLOWICH_C = 36.2
 # branch) while farther than ~3 r_o from the other's wing the law is the thesis's.
 # A vehicle's own branches on its own points keep the thesis's plain law with the Eq. 4.31 cutoff.
 OVERLAP_CORE_CHORD_FRACTION = 1.0
+# The sheet law of the other vehicles' trailing legs (:func:`leg_sheet`; ``WakeModel(sheet=True)``, off by
+# default: the thesis): within SHEET_BLEND_INNER strip widths of a leg's line its strength is spread over
+# its strip (a continuous sheet), beyond SHEET_BLEND_OUTER it is the discrete leg; smooth blend between.
+# A strip and a leg differ by O((w / rho)^2) ~ 1 % at 3 widths, and the discrete sheet's ripple decays
+# as exp(-2 pi rho / w) (1e-8 at 3 widths), so nothing beyond is changed (docs/ell.md "Converged saving").
+SHEET_BLEND_INNER = 4.0
+SHEET_BLEND_OUTER = 6.0
+# The kernels' switch for the sheet law: None (the thesis's legs) or this float. A switch by *type*: numba
+# compiles the None case without the law's code or branches (a bool switched at run time cost the thesis
+# path 8-10 %, measured).
+SHEET_ON = 1.0
 # max over x of (1 - exp(-1.26 x^2)) / x (at x ~ 1.0): the peak of the cored law is
 # CORE_PEAK / (2 pi rc) per unit strength for a semi-infinite or a finite straight branch.
 CORE_PEAK = 0.71635
@@ -132,6 +144,101 @@ def leg_cored(tx, ty, tz, ax, ay, az, inv_a, cutoff, core_radius, overlap_core):
     if f == 1.0:
         return vx, vy, vz
     return f * vx, f * vy, f * vz
+
+
+@_jit_inline
+def _strip_h(x, c):
+    """The primitives at x of the panel-averaged strip law (:func:`leg_sheet`): H_n = (x ln(x^2 + c^2)
+    + 2 c atan(x / c)) / 2 without its linear term (it cancels in the four-point sum), and H_e = (x / c)
+    atan(x / c) - ln(x^2 + c^2) / 2 (c > 0)."""
+    at = math.atan(x / c)
+    lg = math.log(x * x + c * c)
+    return 0.5 * x * lg + c * at, (x / c) * at - 0.5 * lg
+
+
+@_jit_inline
+def _strip_g(x, c):
+    """The primitives at x of the point-sampled strip law: G_n = ln(x^2 + c^2) / 2, G_e = atan(x / c) / c."""
+    return 0.5 * math.log(x * x + c * c), math.atan(x / c) / c
+
+
+@_jit_inline
+def leg_sheet(tx, ty, tz, ax, ay, az, inv_a, cutoff, core_radius, overlap_core, x3, k, has_lo, has_hi, recv_w):
+    """The sheet law of another vehicle's trailing leg at knot k, seen from P (x3 the posed 3/4-chord
+    knots, a = P - x3[k]; ``has_lo`` / ``has_hi``: knot k - 1 / k + 1 is of the same surface), averaged
+    over the receiving bound segment through P of width ``recv_w`` (m, along the source's span; 0: at P).
+
+    Near the wake plane (within SHEET_BLEND_INNER widths of the leg's line) the leg's strength is spread
+    uniformly over its strip, from half-way to the previous knot to half-way to the next (a tip knot: to
+    half-way to its neighbour only), i.e. the discrete sheet becomes the continuous one of the circulation
+    interpolated linearly between the panel midpoints (and to zero at the tips); and
+    the field is averaged over the receiving segment (what its Kutta-Joukowski force, its effective
+    wind and a flow-tangency condition over its span see), so a coarse receiving lattice does not
+    point-sample the sheet's sharp tip. Both in the 2-D law of the plane normal to t with the algebraic
+    core delta (1 / rho^2 -> 1 / (rho^2 + delta^2), delta = max(``core_radius``, ``cutoff``)), closed form
+    (:func:`_strip_h`), times the 3-D factor (1 + cos gamma) / (4 pi) of the strip's centre; the
+    receiving segment is taken parallel to the strip. Beyond SHEET_BLEND_OUTER widths it is
+    :func:`leg_cored` (they differ by O((width / distance)^2) there), with a smooth blend between.
+    Times the overlap core about the knot as :func:`leg_cored`. Unit strength."""
+    ta = tx * ax + ty * ay + tz * az
+    rp2 = max(ax * ax + ay * ay + az * az - ta * ta, 0.0)  # squared distance to the leg's line
+    # the strip's direction e (perpendicular to t) from the neighbouring knots
+    lo_x = lo_y = lo_z = hi_x = hi_y = hi_z = 0.0
+    if has_lo:
+        lo_x, lo_y, lo_z = x3[k - 1, 0] - x3[k, 0], x3[k - 1, 1] - x3[k, 1], x3[k - 1, 2] - x3[k, 2]
+    if has_hi:
+        hi_x, hi_y, hi_z = x3[k + 1, 0] - x3[k, 0], x3[k + 1, 1] - x3[k, 1], x3[k + 1, 2] - x3[k, 2]
+    ex, ey, ez = hi_x - lo_x, hi_y - lo_y, hi_z - lo_z
+    et = ex * tx + ey * ty + ez * tz
+    ex, ey, ez = ex - et * tx, ey - et * ty, ez - et * tz
+    en = math.sqrt(ex * ex + ey * ey + ez * ez)
+    if en < _TINY_H:
+        return leg_cored(tx, ty, tz, ax, ay, az, inv_a, cutoff, core_radius, overlap_core)
+    ex, ey, ez = ex / en, ey / en, ez / en
+    w_lo = -0.5 * (lo_x * ex + lo_y * ey + lo_z * ez)  # >= 0: half-way to the previous knot along -e
+    w_hi = 0.5 * (hi_x * ex + hi_y * ey + hi_z * ez)
+    w = w_lo + w_hi
+    scale = max(w, recv_w)
+    outer = SHEET_BLEND_OUTER * scale
+    if w <= 0.0 or rp2 >= outer * outer:
+        return leg_cored(tx, ty, tz, ax, ay, az, inv_a, cutoff, core_radius, overlap_core)
+    nx, ny, nz = ty * ez - tz * ey, tz * ex - tx * ez, tx * ey - ty * ex
+    eta = ax * ex + ay * ey + az * ez
+    zeta = ax * nx + ay * ny + az * nz
+    dc = max(core_radius, cutoff)
+    c = math.sqrt(zeta * zeta + dc * dc)
+    if recv_w > 1e-9 * w:
+        h = 0.5 * recv_w
+        n1, e1 = _strip_h(eta + w_lo + h, c)
+        n2, e2 = _strip_h(eta + w_lo - h, c)
+        n3, e3 = _strip_h(eta - w_hi + h, c)
+        n4, e4 = _strip_h(eta - w_hi - h, c)
+        i_n = (n1 - n2 - n3 + n4) / recv_w
+        i_e = (e1 - e2 - e3 + e4) / recv_w
+    else:
+        n1, e1 = _strip_g(eta + w_lo, c)
+        n2, e2 = _strip_g(eta - w_hi, c)
+        i_n = n1 - n2
+        i_e = e1 - e2
+    # 3-D factor (1 + cos gamma) / (4 pi) of the strip's centre, per unit strength (density 1 / w)
+    sc = 0.5 * (w_hi - w_lo)
+    cx, cy, cz = ax - sc * ex, ay - sc * ey, az - sc * ez
+    rc2 = cx * cx + cy * cy + cz * cz
+    cos_g = (tx * cx + ty * cy + tz * cz) / math.sqrt(rc2) if rc2 > 0.0 else 0.0
+    f = (1.0 + cos_g) / (FOUR_PI * w)
+    vx = f * (i_n * nx - zeta * i_e * ex)
+    vy = f * (i_n * ny - zeta * i_e * ey)
+    vz = f * (i_n * nz - zeta * i_e * ez)
+    if overlap_core > 0.0:
+        o = _overlap_factor(ax * ax + ay * ay + az * az, overlap_core)
+        vx, vy, vz = o * vx, o * vy, o * vz
+    inner = SHEET_BLEND_INNER * scale
+    if rp2 <= inner * inner:
+        return vx, vy, vz
+    u = (math.sqrt(rp2) - inner) / (outer - inner)
+    lam = 1.0 - u * u * (3.0 - 2.0 * u)  # smoothstep from the sheet (inner) to the leg (outer)
+    lx, ly, lz = leg_cored(tx, ty, tz, ax, ay, az, inv_a, cutoff, core_radius, overlap_core)
+    return lam * vx + (1.0 - lam) * lx, lam * vy + (1.0 - lam) * ly, lam * vz + (1.0 - lam) * lz
 
 
 @_jit_inline

@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import numba as nb
 
-from .biot_savart import CORE_NONE, branch_cored, core_radius, leg_cored, point_to_knots
+from .biot_savart import CORE_NONE, branch_cored, core_radius, leg_cored, leg_sheet, point_to_knots
 from .posing import posed_lattice
 
 __all__ = ["field_velocity", "field_velocity_batch"]
@@ -19,7 +19,7 @@ def field_velocity(
     px, py, pz, vehicle_filter, keep_only,
     x1, x3, bound_dir, chord_dir, trail, origin, airspeed, gamma,
     surface_knot_start, surface_panel_start, surface_vehicle, surface_core_scale,
-    cutoff, core_mode, nu, overlap_core, r1, inv1, r3, inv3,
+    cutoff, core_mode, nu, overlap_core, r1, inv1, r3, inv3, sheet=None, recv_w=0.0,
 ):
     """Velocity induced at one field point by the horseshoes of every vehicle except
     ``vehicle_filter`` (-1 excludes none) or, with ``keep_only``, of that vehicle alone
@@ -30,7 +30,10 @@ def field_velocity(
     about the source's lifting surface and the legs a core of at least the cutoff
     (:func:`branch_cored`, :func:`leg_cored`), so |v| <= CORE_PEAK / (2 pi min(overlap_core, cutoff))
     per unit strength and branch at any point; callers pass it for the *other* vehicles' field and 0
-    for a vehicle's own field (the solve's law)."""
+    for a vehicle's own field (the solve's law). ``sheet`` a float (not None; a compile-time switch as in
+    :func:`formation_env.wake.aic.assemble_and_solve`): the trailing legs take the sheet law
+    near their wake plane (:func:`leg_sheet`), averaged over a receiving segment of width ``recv_w``
+    (m; 0: at the point); passed, like ``overlap_core``, for the other vehicles' field."""
     vx = 0.0
     vy = 0.0
     vz = 0.0
@@ -55,7 +58,11 @@ def field_velocity(
             if k > k0:
                 g -= gamma[p0 + (k - k0) - 1]
             if g != 0.0:
-                lx, ly, lz = leg_cored(t[0], t[1], t[2], r3[k, 0], r3[k, 1], r3[k, 2], inv3[k], cutoff, rc, overlap_core)
+                if sheet is not None:
+                    lx, ly, lz = leg_sheet(t[0], t[1], t[2], r3[k, 0], r3[k, 1], r3[k, 2], inv3[k], cutoff, rc, overlap_core,
+                                           x3, k, k > k0, k < k1 - 1, recv_w)
+                else:
+                    lx, ly, lz = leg_cored(t[0], t[1], t[2], r3[k, 0], r3[k, 1], r3[k, 2], inv3[k], cutoff, rc, overlap_core)
                 sx, sy, sz = branch_cored(chord_dir[k, 0], chord_dir[k, 1], chord_dir[k, 2], r3[k, 0], r3[k, 1], r3[k, 2],
                                           inv3[k], r1[k, 0], r1[k, 1], r1[k, 2], inv1[k], cutoff, overlap_core)
                 vx += g * (sx - lx)
@@ -77,20 +84,22 @@ def field_velocity_batch(
     points, vehicle_filter, keep_only, pos, euler, airspeed, alpha, beta, gamma,
     knot_x1_b, knot_x3_b, knot_vehicle, knot_surface,
     surface_origin_b, surface_vehicle, surface_knot_start, surface_panel_start, surface_core_scale,
-    cutoff, core_mode, nu, overlap_core, out,
+    cutoff, core_mode, nu, overlap_core, out, sheet=None, recv_w=None,
 ):
     """Induced velocity (NED) at arbitrary points (B, P, 3) for solved circulations (B, N);
-    ``vehicle_filter`` (P,), ``keep_only`` and ``overlap_core`` as in :func:`field_velocity`."""
+    ``vehicle_filter`` (P,), ``keep_only``, ``overlap_core`` and ``sheet`` as in :func:`field_velocity`, ``recv_w`` (P,) its receiving width
+    per point (None: 0)."""
     for b in nb.prange(pos.shape[0]):
         rot, vel, trail, x1, x3, origin, bound_dir, chord_dir, r1, inv1, r3, inv3 = posed_lattice(
             pos[b], euler[b], airspeed[b], alpha[b], beta[b], knot_x1_b, knot_x3_b, knot_vehicle, knot_surface,
             surface_origin_b, surface_vehicle, surface_knot_start)
         for p in range(points.shape[1]):
+            rw = 0.0 if recv_w is None else recv_w[p]
             wx, wy, wz = field_velocity(points[b, p, 0], points[b, p, 1], points[b, p, 2], vehicle_filter[p], keep_only,
                                         x1, x3, bound_dir, chord_dir, trail, origin, airspeed[b], gamma[b],
                                         surface_knot_start, surface_panel_start,
                                         surface_vehicle, surface_core_scale, cutoff, core_mode, nu, overlap_core, r1, inv1, r3,
-                                        inv3)
+                                        inv3, sheet, rw)
             out[b, p, 0] = wx
             out[b, p, 1] = wy
             out[b, p, 2] = wz

@@ -28,7 +28,7 @@ import numpy as np
 from .aic import assemble_and_solve, lu_solve_inplace, static_aic
 from .biot_savart import (_MIN_CORE_M, _TINY_H, CORE_KURYLOWICH, CORE_LAMB_OSEEN, CORE_NONE, CORE_PEAK,  # noqa: F401
                           FOUR_PI, KURYLOWICH_C, LAMB_OSEEN_C, OVERLAP_CORE_CHORD_FRACTION, branch, branch_cored,
-                          core_radius, leg, leg_velocity, point_to_knots, segment_velocity)
+                          core_radius, leg, leg_velocity, point_to_knots, segment_velocity, SHEET_ON)
 from .field import field_velocity, field_velocity_batch
 from .posing import branch_directions, dcm_ned_to_body_1, place_lattice, posed_lattice, to_ned
 
@@ -37,7 +37,7 @@ __all__ = ["evaluate_one", "effective_wind", "evaluate_batch_serial", "evaluate_
            "dcm_ned_to_body_1", "to_ned", "branch_directions", "point_to_knots", "branch", "branch_cored", "leg",
            "core_radius", "CORE_PEAK", "OVERLAP_CORE_CHORD_FRACTION", "default_overlap_core",
            "segment_velocity", "leg_velocity", "FOUR_PI", "CORE_NONE", "CORE_LAMB_OSEEN", "CORE_KURYLOWICH",
-           "LAMB_OSEEN_C", "KURYLOWICH_C"]
+           "LAMB_OSEEN_C", "KURYLOWICH_C", "SHEET_ON"]
 
 _jit = nb.njit(cache=True, fastmath=False, error_model="numpy")
 
@@ -49,14 +49,16 @@ def evaluate_one(
     surface_origin_b, surface_vehicle, surface_knot_start, surface_panel_start, surface_core_scale,
     panel_left_knot, panel_vehicle, control_b, normal_b, aic_static, eval_b, grad_w, vehicle_panel_start,
     cutoff, core_mode, aic_core_mode, nu,
-    gamma_out, vpts_out, wind_ned_out, wind_b_out, omega_b_out, omega_ned_out, overlap_core=-1.0,
+    gamma_out, vpts_out, wind_ned_out, wind_b_out, omega_b_out, omega_ned_out, overlap_core=-1.0, sheet=None,
 ):
     """One formation: pose, joint solve, induced velocity at the evaluation points (other
     vehicles only) and the effective translational and rotational wind per vehicle.
     ``overlap_core`` (m, 0 = off): the minimum core of the other vehicles' branches in the solve
     and the field (see :func:`formation_env.wake.field.field_velocity`); negative (the default):
     the default overlap core of this lattice, :func:`default_overlap_core` (what ``WakeModel``
-    uses unless told otherwise)."""
+    uses unless told otherwise). ``sheet`` (None: the thesis; a float, :data:`SHEET_ON`: a compile-time
+    switch): the other vehicles' trailing legs take the sheet law near their wake plane in the solve and the
+    field (``WakeModel.sheet``)."""
     if overlap_core < 0.0:
         overlap_core = default_overlap_core(knot_x1_b, knot_x3_b, surface_knot_start)
     n_panels = panel_left_knot.shape[0]
@@ -72,7 +74,7 @@ def evaluate_one(
     vcross = np.empty((n_panels, n_panels, 3) if shared else (0, 0, 3))
     assemble_and_solve(x1, x3, bound_dir, chord_dir, trail, vel, rot, pos, origin, airspeed, knot_vehicle, knot_surface,
                        surface_core_scale, panel_left_knot, panel_vehicle, control_b, normal_b, aic_static, cutoff,
-                       aic_core_mode, nu, overlap_core, aic, gamma_out, r1, inv1, r3, inv3, vcross)
+                       aic_core_mode, nu, overlap_core, aic, gamma_out, r1, inv1, r3, inv3, vcross, sheet)
     if shared:
         for j in range(n_panels):
             v = panel_vehicle[j]
@@ -93,10 +95,14 @@ def evaluate_one(
         for j in range(n_panels):
             v = panel_vehicle[j]
             to_ned(rot[v], pos[v], eval_b[j], pt)
+            recv_w = 0.0
+            if sheet is not None:
+                k = panel_left_knot[j]
+                recv_w = np.sqrt((x1[k + 1, 0] - x1[k, 0]) ** 2 + (x1[k + 1, 1] - x1[k, 1]) ** 2 + (x1[k + 1, 2] - x1[k, 2]) ** 2)
             wx, wy, wz = field_velocity(pt[0], pt[1], pt[2], v, False, x1, x3, bound_dir, chord_dir, trail, origin,
                                         airspeed, gamma_out, surface_knot_start, surface_panel_start,
                                         surface_vehicle, surface_core_scale, cutoff, core_mode, nu, overlap_core,
-                                        r1, inv1, r3, inv3)
+                                        r1, inv1, r3, inv3, sheet, recv_w)
             vpts_out[j, 0] = wx
             vpts_out[j, 1] = wy
             vpts_out[j, 2] = wz
@@ -188,7 +194,7 @@ def _make_batch(parallel: bool):
         surface_origin_b, surface_vehicle, surface_knot_start, surface_panel_start, surface_core_scale,
         panel_left_knot, panel_vehicle, control_b, normal_b, aic_static, eval_b, grad_w, vehicle_panel_start,
         cutoff, core_mode, aic_core_mode, nu,
-        gamma_out, vpts_out, wind_ned_out, wind_b_out, omega_b_out, omega_ned_out, overlap_core,
+        gamma_out, vpts_out, wind_ned_out, wind_b_out, omega_b_out, omega_ned_out, overlap_core, sheet=None,
     ):
         for b in nb.prange(pos.shape[0]):
             evaluate_one(
@@ -198,7 +204,7 @@ def _make_batch(parallel: bool):
                 panel_left_knot, panel_vehicle, control_b, normal_b, aic_static, eval_b, grad_w, vehicle_panel_start,
                 cutoff, core_mode, aic_core_mode, nu,
                 gamma_out[b], vpts_out[b], wind_ned_out[b], wind_b_out[b], omega_b_out[b], omega_ned_out[b],
-                overlap_core,
+                overlap_core, sheet,
             )
 
     return evaluate_batch

@@ -60,7 +60,9 @@ def vehicle_loads(model: WakeModel, state: FormationState, solution: WakeSolutio
     mid = 0.5 * (a + b)
     owner = t.panel_vehicle
     v_own = model.induced_velocity(state, solution, mid, only_vehicle=owner, core="none")
-    v_others = model.induced_velocity(state, solution, mid, exclude_vehicle=owner)
+    # with the sheet law the other vehicles' wake is averaged over each bound vortex (its force's integral)
+    width = np.linalg.norm(t.knot_x1_b[left + 1] - t.knot_x1_b[left], axis=1) if model.sheet else None
+    v_others = model.induced_velocity(state, solution, mid, exclude_vehicle=owner, receiving_width_m=width)
     rot = dcm_ned_to_body(state.euler_rad)  # (B, V, 3, 3)
     ub = np.stack([np.cos(state.alpha_rad) * np.cos(state.beta_rad), np.sin(state.beta_rad),
                    np.sin(state.alpha_rad) * np.cos(state.beta_rad)], axis=-1)  # (B, V, 3) body

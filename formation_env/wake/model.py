@@ -88,6 +88,12 @@ class WakeModel:
         lifting surface it changes nothing. 0 turns it off (the previous law, singular when vehicles
         overlap). A vehicle's own branches on its own points always keep the thesis's law (plain,
         Eq. 4.31 cutoff).
+    sheet:
+        The sheet law of the *other* vehicles' trailing legs (in the joint solve, the field and the
+        loads): near another vehicle's wake plane (within 4-6 panel widths of a leg) each leg's strength
+        is spread over its strip, so the wake is the continuous sheet of the piecewise-linear
+        circulation rather than single legs (:func:`formation_env.wake.biot_savart.leg_sheet`), averaged
+        over the receiving panel (docs/ell.md, "Converged saving"). Default False: the thesis's discrete legs.
     saving_scale:
         Factor on the induced-drag saving (``formation_benefit``'s ``induced_drag_saving``, the compiled
         :func:`formation_env.wake.benefit.induced_drag_saving_one`): 1.0 (the default, the thesis) leaves it
@@ -108,6 +114,7 @@ class WakeModel:
         viscous_aic: bool = True,
         overlap_core: float = kernels.OVERLAP_CORE_CHORD_FRACTION,
         saving_scale: float = 1.0,
+        sheet: bool = False,
     ) -> None:
         vehicles = tuple(vehicles)
         if not vehicles:
@@ -127,6 +134,8 @@ class WakeModel:
             raise ValueError(f"WakeModel: span_tol must be in (0, 1), got {span_tol!r}")
         if not (np.isfinite(overlap_core) and overlap_core >= 0):
             raise ValueError(f"WakeModel: overlap_core must be finite and >= 0, got {overlap_core!r}")
+        if not isinstance(sheet, (bool, np.bool_)):
+            raise ValueError(f"WakeModel: sheet must be True or False, got {sheet!r}")
         if not (np.isfinite(saving_scale) and saving_scale > 0):
             raise ValueError(f"WakeModel: saving_scale must be finite and > 0, got {saving_scale!r}")
         self.vehicles = vehicles
@@ -144,6 +153,7 @@ class WakeModel:
         r_default = float(kernels.default_overlap_core(t.knot_x1_b, t.knot_x3_b, t.surface_knot_start))
         self.overlap_core_m = (r_default if self.overlap_core == kernels.OVERLAP_CORE_CHORD_FRACTION
                                else r_default * self.overlap_core / kernels.OVERLAP_CORE_CHORD_FRACTION)
+        self.sheet = bool(sheet)
         self.eval_b = t.control_b if eval_points == "control" else t.quarter_chord_b
         self.grad_w = gradient_weights(t, self.eval_b, rotational, span_tol)
         self.aic_static = kernels.static_aic(t.knot_x1_b, t.knot_x3_b, t.knot_vehicle, t.knot_surface, t.surface_knot_start,
@@ -190,7 +200,7 @@ class WakeModel:
             t.panel_left_knot, t.panel_vehicle, t.control_b, t.normal_b, self.aic_static, self.eval_b, self.grad_w,
             t.vehicle_panel_start, t.cutoff_m, self._core_mode,
             self._core_mode if self.viscous_aic else kernels.CORE_NONE, self.kinematic_viscosity,
-            gamma, vpts, *out, self.overlap_core_m,
+            gamma, vpts, *out, self.overlap_core_m, kernels.SHEET_ON if self.sheet else None,
         )
         return WakeSolution(gamma, vpts, *out)
 
@@ -204,6 +214,7 @@ class WakeModel:
         only_vehicle: int | np.ndarray | None = None,
         core: str | None = None,
         overlap: bool | None = None,
+        receiving_width_m: np.ndarray | None = None,
     ) -> np.ndarray:
         """Induced velocity (m/s, NED) at arbitrary field points.
 
@@ -211,8 +222,10 @@ class WakeModel:
         index (or one per point) whose own horseshoes are left out; None includes all.
         only_vehicle: instead, keep only that vehicle's horseshoes. core: override the model's
         viscous core for this call (e.g. ``"none"`` for the AIC-consistent law). The overlap core
-        (``overlap_core_m``) applies to every branch unless ``only_vehicle`` is given (one vehicle's
-        own field: the solve's law), or when ``overlap=False``.
+        (``overlap_core_m``) and the sheet law (``sheet``) apply to every branch unless
+        ``only_vehicle`` is given (one vehicle's own field: the solve's law), or when ``overlap=False``.
+        receiving_width_m (P,): with the sheet law, the width (m) of the receiving bound segment through
+        each point over which the other vehicles' sheet is averaged (the loads pass their panels'; None: 0).
         """
         state = self._check_state(state)
         pts = np.asarray(points_ned, dtype=float)
@@ -232,13 +245,19 @@ class WakeModel:
         if core is not None and core not in CORES:
             raise ValueError(f"induced_velocity: core must be one of {tuple(CORES)}, got {core!r}")
         core_mode = self._core_mode if core is None else CORES[core]
+        others = only_vehicle is None if overlap is None else overlap  # the other vehicles' law (cores)
+        rw = None
+        if receiving_width_m is not None:
+            rw = np.ascontiguousarray(np.broadcast_to(np.asarray(receiving_width_m, dtype=float), (pts.shape[1],)))
+            if not np.all(np.isfinite(rw) & (rw >= 0)):
+                raise ValueError("induced_velocity: receiving_width_m must be finite and >= 0")
         out = np.empty(pts.shape)
         kernels.field_velocity_batch(
             np.ascontiguousarray(pts), np.ascontiguousarray(vf), only_vehicle is not None,
             state.position_ned, state.euler_rad, state.airspeed_mps, state.alpha_rad, state.beta_rad,
             np.ascontiguousarray(solution.circulation), *self._geometry_args,
             self.template.cutoff_m, core_mode, self.kinematic_viscosity,
-            self.overlap_core_m if (only_vehicle is None if overlap is None else overlap) else 0.0, out,
+            self.overlap_core_m if others else 0.0, out, kernels.SHEET_ON if (self.sheet and others) else None, rw,
         )
         return out
 
