@@ -5,7 +5,8 @@
 # hyperparameters are identical): PPO, setpoints actions,
 # frozen Dryden turbulence sigma 1 m/s (wake_surfing: its task preset, train/hyperparams/ppo.yml), wake on, 3 training seeds per task, run two at a time on the
 # 2-core machine (one core each: NUMBA_NUM_THREADS=1, torch on 1 thread), then published with their
-# curves and validation history. Usage: bash train/committed_runs.sh [RUNS_DIR]
+# curves and validation history (echelon3, issue 25: seeds 0 and 1 two at a time, seed 2 beside their held-out
+# evaluation). Usage: bash train/committed_runs.sh [RUNS_DIR]
 set -euo pipefail
 cd "$(dirname "$0")/.."
 RUNS=${1:-runs/committed}
@@ -22,6 +23,7 @@ jobs_list() {
     echo "wake_surfing_random_leader 2000000 $seed"
     echo "vee5 2000000 $seed"
     echo "vee5_mappo 2000000 $seed"   # vee5 with train/hyperparams/mappo.yml (the centralised critic)
+    echo "echelon3 2000000 $seed"
   done
 }
 # ONLY="scenario:seed scenario:seed ..." runs a subset (e.g. to redo one run)
@@ -45,7 +47,7 @@ export RUNS FE
 jobs_list | selected | xargs -P 2 -L 1 bash -c 'run_one "$0" "$1" "$2"'
 [ -n "${NO_PUBLISH:-}" ] && exit 0
 
-for scenario in formation_keeping close_formation reconfiguration wake_surfing wake_surfing_random_leader vee5; do
+for scenario in formation_keeping close_formation reconfiguration wake_surfing wake_surfing_random_leader vee5 echelon3; do
   for seed in 0 1 2; do
     run="$RUNS/${scenario}_seed${seed}"
     wall=$("$PY" -c "import json,sys; print(json.load(open(sys.argv[1]))['wall_s'])" "$run/summary.json")

@@ -262,6 +262,19 @@ def test_address_parsing_and_unreachable_cluster_errors(capsys, tmp_path, monkey
     assert time.perf_counter() - t0 < 30  # refused at once, not after Ray's minute of retries
     monkeypatch.delenv("RAY_ADDRESS", raising=False)
     monkeypatch.setenv("RAY_TMPDIR", ray_tmpdir)
+    # "auto" falls back to any GCS process Ray finds on the machine (ray._private.services.find_gcs_addresses, a
+    # process scan): with test_multinode.py's cluster alive on the other xdist worker it joined that cluster, which
+    # was then torn down, and ray.init waited on its GCS for ever (the suite hung twice, measured). This test is
+    # about a machine without a cluster: make the scan see none.
+    import functools
+
+    import ray._private.services as ray_services
+
+    @functools.lru_cache  # Ray clears the real one's cache
+    def no_gcs_processes():
+        return []
+
+    monkeypatch.setattr(ray_services, "find_gcs_addresses", no_gcs_processes)
     with pytest.raises(ClusterUnreachableError, match="no running Ray cluster"):
         connect("auto", log=lambda m: None)
     out = tmp_path / "run"
