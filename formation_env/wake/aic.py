@@ -8,7 +8,7 @@ import numba as nb
 import numpy as np
 
 from .biot_savart import CORE_NONE, branch, branch_cored, core_radius, leg, leg_cored, leg_sheet, point_to_knots
-from .posing import branch_directions, to_ned
+from .posing import bound_length, branch_directions, to_ned
 
 __all__ = ["lu_solve_inplace", "static_aic", "assemble_and_solve"]
 
@@ -131,9 +131,7 @@ def assemble_and_solve(
         point_to_knots(cp[0], cp[1], cp[2], x1, x3, 0, n_knots, r1, inv1, r3, inv3)
         recv_w = 0.0
         if sheet is not None:
-            kj = panel_left_knot[j]
-            recv_w = np.sqrt((x1[kj + 1, 0] - x1[kj, 0]) ** 2 + (x1[kj + 1, 1] - x1[kj, 1]) ** 2
-                             + (x1[kj + 1, 2] - x1[kj, 2]) ** 2)
+            recv_w = bound_length(x1, panel_left_knot[j])
         rc_surface = -1  # the surface whose core radius rc_s holds (the radius depends on the point and the
         rc_s = 0.0       # surface only, and a surface's knots are contiguous: once per surface, not per knot)
         for k in range(n_knots):

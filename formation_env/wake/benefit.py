@@ -82,7 +82,8 @@ def induced_drag_one(wake, gamma, pos, euler, speed, alpha, beta, out_drag, air_
         ex, ey, ez = field_velocity(mx, my, mz, v, False, x1, x3, bound_dir, chord_dir, trail, origin, speed, gamma,
                                     wake.surface_knot_start, wake.surface_panel_start, wake.surface_vehicle,
                                     wake.surface_core_scale, wake.cutoff_m, wake.core_mode, wake.kinematic_viscosity,
-                                    wake.overlap_core_m, r1, inv1, r3, inv3, wake.sheet, np.sqrt(lx * lx + ly * ly + lz * lz))
+                                    wake.overlap_core_m, r1, inv1, r3, inv3, wake.sheet,
+                                    0.0 if wake.sheet is None else np.sqrt(lx * lx + ly * ly + lz * lz))
         _add_kutta_joukowski(f, v, air_density * gamma[j], vel[v, 0], vel[v, 1], vel[v, 2], ox, oy, oz, ex, ey, ez,
                              lx, ly, lz)
     for v in range(nv):
@@ -240,7 +241,7 @@ def induced_drags_one(wake, wake_alone, pos, euler, speed, alpha, beta, gamma_fo
                                     gamma_formation, wake.surface_knot_start, wake.surface_panel_start,
                                     wake.surface_vehicle, wake.surface_core_scale, wake.cutoff_m, wake.core_mode,
                                     wake.kinematic_viscosity, wake.overlap_core_m, r1, inv1, r3, inv3, wake.sheet,
-                                    np.sqrt(lx * lx + ly * ly + lz * lz))
+                                    0.0 if wake.sheet is None else np.sqrt(lx * lx + ly * ly + lz * lz))
         _add_kutta_joukowski(f, v, air_density * gamma_formation[j], vel[v, 0], vel[v, 1], vel[v, 2], ox, oy, oz,
                              ex, ey, ez, lx, ly, lz)
         # alone: no other vehicle (the separate solve adds the empty others' field, 0.0, as here)

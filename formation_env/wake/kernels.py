@@ -30,7 +30,7 @@ from .biot_savart import (_MIN_CORE_M, _TINY_H, CORE_KURYLOWICH, CORE_LAMB_OSEEN
                           FOUR_PI, KURYLOWICH_C, LAMB_OSEEN_C, OVERLAP_CORE_CHORD_FRACTION, branch, branch_cored,
                           core_radius, leg, leg_velocity, point_to_knots, segment_velocity, SHEET_ON)
 from .field import field_velocity, field_velocity_batch
-from .posing import branch_directions, dcm_ned_to_body_1, place_lattice, posed_lattice, to_ned
+from .posing import bound_length, branch_directions, dcm_ned_to_body_1, place_lattice, posed_lattice, to_ned
 
 __all__ = ["evaluate_one", "effective_wind", "evaluate_batch_serial", "evaluate_batch_parallel", "field_velocity_batch",
            "field_velocity", "assemble_and_solve", "static_aic", "lu_solve_inplace", "posed_lattice", "place_lattice",
@@ -97,8 +97,7 @@ def evaluate_one(
             to_ned(rot[v], pos[v], eval_b[j], pt)
             recv_w = 0.0
             if sheet is not None:
-                k = panel_left_knot[j]
-                recv_w = np.sqrt((x1[k + 1, 0] - x1[k, 0]) ** 2 + (x1[k + 1, 1] - x1[k, 1]) ** 2 + (x1[k + 1, 2] - x1[k, 2]) ** 2)
+                recv_w = bound_length(x1, panel_left_knot[j])
             wx, wy, wz = field_velocity(pt[0], pt[1], pt[2], v, False, x1, x3, bound_dir, chord_dir, trail, origin,
                                         airspeed, gamma_out, surface_knot_start, surface_panel_start,
                                         surface_vehicle, surface_core_scale, cutoff, core_mode, nu, overlap_core,

@@ -249,8 +249,10 @@ class WakeModel:
         rw = None
         if receiving_width_m is not None:
             rw = np.ascontiguousarray(np.broadcast_to(np.asarray(receiving_width_m, dtype=float), (pts.shape[1],)))
-            if not np.all(np.isfinite(rw) & (rw >= 0)):
-                raise ValueError("induced_velocity: receiving_width_m must be finite and >= 0")
+            bad = ~(np.isfinite(rw) & (rw >= 0))
+            if bad.any():
+                raise ValueError(f"induced_velocity: receiving_width_m must be finite and >= 0 (m), got "
+                                 f"{rw[bad][0]!r} at point {int(np.argmax(bad))}")
         out = np.empty(pts.shape)
         kernels.field_velocity_batch(
             np.ascontiguousarray(pts), np.ascontiguousarray(vf), only_vehicle is not None,

@@ -10,7 +10,7 @@ import math
 import numba as nb
 import numpy as np
 
-__all__ = ["dcm_ned_to_body_1", "place_lattice", "to_ned", "branch_directions", "posed_lattice"]
+__all__ = ["dcm_ned_to_body_1", "place_lattice", "to_ned", "bound_length", "branch_directions", "posed_lattice"]
 
 _jit = nb.njit(cache=True, fastmath=False, error_model="numpy")
 
@@ -70,6 +70,12 @@ def to_ned(rot_v, pos_v, pb, out):
     """out = pos_v + rot_v^T pb (a body-axis point of vehicle v to NED)."""
     for i in range(3):
         out[i] = pos_v[i] + rot_v[0, i] * pb[0] + rot_v[1, i] * pb[1] + rot_v[2, i] * pb[2]
+
+
+@_jit
+def bound_length(x1, k):
+    """Length (m) of the bound vortex X1[k] -> X1[k+1]: a receiving panel's width for the sheet law."""
+    return np.sqrt((x1[k + 1, 0] - x1[k, 0]) ** 2 + (x1[k + 1, 1] - x1[k, 1]) ** 2 + (x1[k + 1, 2] - x1[k, 2]) ** 2)
 
 
 @_jit

@@ -16,24 +16,35 @@ ROOT = Path(__file__).resolve().parents[2] / "train" / "policies"
 RECORD = ROOT / "vee5_ppo_setpoints_levels.json"
 
 
+ECHELON_RECORD = ROOT / "echelon3_ppo_setpoints_levels.json"
+
+
+def _sigma1_record(path: Path, task: str) -> dict:
+    return json.loads(path.read_text())["records"][task][0]["by_level"]["sigma_1"]
+
+
+def _refly_two(rec: dict, task: str, name: str) -> dict:
+    """Two of the record's held-out sigma-1 episodes of the committed zip ``name`` flown again: they give the
+    recorded harvest ratio and formation saving (the record rounds to 6 digits). Returns the policy's columns."""
+    cols = rec["episodes"][name]
+    pol = load_policy(str(ROOT / f"{name}.zip"))
+    eps = run_episodes(pol, eval_env_config(task, pol.action_mode, turbulence_sigma_mps=1.0), cols["seed"][:2])
+    for key in ("harvest_ratio", "formation_saving"):
+        assert [e[key] for e in eps] == pytest.approx(cols[key][:2], rel=1e-5, abs=1e-6)
+    return cols
+
+
 @pytest.mark.skipif(not RECORD.is_file(), reason="no committed vee5 record")
 @pytest.mark.parametrize("task", ["vee5", "echelon3"])
 def test_the_committed_record_is_what_the_policy_flies(task):
     """Two of the record's held-out sigma-1 episodes flown again with the committed zip give the recorded harvest
     ratio and formation saving (the record rounds to 6 digits); the summary is the mean of the record's own
     100 episodes."""
-    rec = json.loads(RECORD.read_text())["records"][task][0]["by_level"]["sigma_1"]
+    rec = _sigma1_record(RECORD, task)
     name = "vee5_ppo_setpoints_seed1"
-    cols = rec["episodes"][name]
-    pol = load_policy(str(ROOT / f"{name}.zip"))
-    eps = run_episodes(pol, eval_env_config(task, pol.action_mode, turbulence_sigma_mps=1.0), cols["seed"][:2])
-    for key in ("harvest_ratio", "formation_saving"):
-        assert [e[key] for e in eps] == pytest.approx(cols[key][:2], rel=1e-5, abs=1e-6)
+    cols = _refly_two(rec, task, name)
     assert len(cols["harvest_ratio"]) == 100
     assert rec["summaries"][name]["harvest_ratio"] == pytest.approx(np.mean(cols["harvest_ratio"]), abs=1e-6)
-
-
-ECHELON_RECORD = ROOT / "echelon3_ppo_setpoints_levels.json"
 
 
 @pytest.mark.skipif(not ECHELON_RECORD.is_file(), reason="no committed echelon3 record")
@@ -41,13 +52,8 @@ def test_the_committed_echelon3_record_is_what_the_policy_flies():
     """The echelon3-trained policies' held-out record (issue 25): two of its sigma-1 episodes flown again with
     the committed zip of seed 2 give the recorded harvest ratio and formation saving; every seed's 100 episodes
     are there and collision-free as recorded."""
-    rec = json.loads(ECHELON_RECORD.read_text())["records"]["echelon3"][0]["by_level"]["sigma_1"]
-    name = "echelon3_ppo_setpoints_seed2"
-    cols = rec["episodes"][name]
-    pol = load_policy(str(ROOT / f"{name}.zip"))
-    eps = run_episodes(pol, eval_env_config("echelon3", pol.action_mode, turbulence_sigma_mps=1.0), cols["seed"][:2])
-    for key in ("harvest_ratio", "formation_saving"):
-        assert [e[key] for e in eps] == pytest.approx(cols[key][:2], rel=1e-5, abs=1e-6)
+    rec = _sigma1_record(ECHELON_RECORD, "echelon3")
+    _refly_two(rec, "echelon3", "echelon3_ppo_setpoints_seed2")
     for k in range(3):
         seed_cols = rec["episodes"][f"echelon3_ppo_setpoints_seed{k}"]
         assert len(seed_cols["harvest_ratio"]) == 100
