@@ -60,8 +60,20 @@ class WakeConfig:
     # the ELL's sheet law (WakeModel sheet: the other vehicles' trailing legs as a continuous sheet near their
     # wake plane; False the thesis's discrete legs); None: the scenario's wake_sheet (resolve_sheet)
     sheet: bool | None = None
+    # the residual table of pairs on top of the sheet law and span correction (formation_env.wake.residual: the
+    # saving and both couplings' winds of a fine nseg-80 lattice at the coarse lattice's cost); requires
+    # sheet=True, span_correction=True, nseg 10, no tailplane (what the table was built for)
+    residual_table: bool = False
 
     def __post_init__(self) -> None:
+        if not isinstance(self.residual_table, bool):
+            raise ValueError(f"WakeConfig: residual_table must be True or False, got {self.residual_table!r}")
+        if self.residual_table and not (self.sheet is True and self.span_correction and self.nseg == 10
+                                        and not self.tailplane):
+            raise ValueError("WakeConfig: residual_table=True needs sheet=True, span_correction=True, nseg=10 and "
+                             f"tailplane=False (the table's base), got sheet={self.sheet!r}, "
+                             f"span_correction={self.span_correction!r}, nseg={self.nseg!r}, "
+                             f"tailplane={self.tailplane!r}")
         if self.sheet is not None and not isinstance(self.sheet, bool):
             raise ValueError(f"WakeConfig: sheet must be None, True or False, got {self.sheet!r}")
         if not isinstance(self.span_correction, bool):
@@ -139,6 +151,14 @@ def wake_model_for(wake: WakeConfig, n_vehicles: int, coupling: str | None = Non
         from ..wake.converged import span_efficiency_scale
 
         scale = span_efficiency_scale(vehicle)
+    residual = None
+    if wake.residual_table:
+        from ..wake.residual import load_table
+
+        if (resolve_coupling(wake) if coupling is None else coupling) != "load_weighted":
+            raise ValueError("WakeConfig: residual_table=True needs the load_weighted coupling (the table's "
+                             f"lift-matched wing), got coupling {coupling!r}")
+        residual = load_table()
     return WakeModel([vehicle] * n_vehicles, core=wake.core, eval_points=wake.eval_points, rotational=wake.rotational,
                      viscous_aic=wake.viscous_aic, saving_scale=scale,
-                     sheet=resolve_sheet(wake) if sheet is None else bool(sheet))
+                     sheet=resolve_sheet(wake) if sheet is None else bool(sheet), residual=residual)

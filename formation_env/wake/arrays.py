@@ -44,6 +44,8 @@ class WakeArrays(NamedTuple):
     wing_origin_body: np.ndarray  # (3,) wing root quarter chord relative to the CG, body axes, m
     n_panels: int
     saving_scale: float  # factor on the induced-drag saving (WakeModel.saving_scale; 1.0: the thesis)
+    residual: object  # None, or the residual table of pairs (formation_env.wake.residual.ResidualTable; WakeModel.residual):
+    #                   a switch by type, as sheet
 
 
 
@@ -61,7 +63,7 @@ def wake_arrays(model, wing_origin_body) -> WakeArrays:
         kinematic_viscosity=float(model.kinematic_viscosity), overlap_core_m=float(model.overlap_core_m),
         sheet=SHEET_ON if model.sheet else None,
         wing_origin_body=np.ascontiguousarray(wing_origin_body, dtype=float), n_panels=int(model.n_panels),
-        saving_scale=float(getattr(model, "saving_scale", 1.0)))
+        saving_scale=float(getattr(model, "saving_scale", 1.0)), residual=getattr(model, "residual", None))
 
 
 @nb.njit(cache=True, error_model="numpy")

@@ -30,6 +30,7 @@ from .arrays import evaluate_formation
 from .aic import assemble_and_solve
 from .biot_savart import branch, leg, point_to_knots
 from .kernels import CORE_NONE, field_velocity, posed_lattice
+from .residual import add_saving_residual
 
 __all__ = ["induced_drag_one", "isolated_induced_drag_one", "induced_drags_one", "induced_drag_saving_one",
            "induced_drag_saving", "AIR_DENSITY_SL"]
@@ -268,6 +269,7 @@ def induced_drag_saving_one(wake, wake_alone, pos, euler, speed, alpha, beta, ga
         out_saving[v] = 1.0 - d_form[v] / d_alone[v] if abs(d_alone[v]) > 0.0 else 0.0
         if wake.saving_scale != 1.0:  # the span-efficiency correction (WakeModel saving_scale)
             out_saving[v] *= wake.saving_scale
+    add_saving_residual(wake.residual, pos, euler, out_saving)  # the residual table of pairs (None: nothing)
 
 
 def induced_drag_saving(model, state, air_density: float = AIR_DENSITY_SL) -> np.ndarray:
@@ -313,4 +315,5 @@ def induced_drag_saving(model, state, air_density: float = AIR_DENSITY_SL) -> np
                 out[b, v] = 1.0 - d_form[v] / d_alone if abs(d_alone) > 0.0 else 0.0
                 if model.saving_scale != 1.0:
                     out[b, v] *= model.saving_scale
+            add_saving_residual(model.residual, pos, euler, out[b])
     return out

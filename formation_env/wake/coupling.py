@@ -36,6 +36,7 @@ import numpy as np
 
 from .arrays import evaluate_formation
 from .posing import dcm_ned_to_body_1
+from .residual import add_wind_residual
 
 __all__ = ["COUPLINGS", "EFFECTIVE_WIND", "LOAD_WEIGHTED", "CouplingArrays", "coupling_arrays", "coupling_code",
            "lift_matched_incidence_rad", "lift_matched_vehicle", "roll_weights", "load_weighted_wind", "coupled_wind"]
@@ -206,7 +207,9 @@ def coupled_wind(wake, coupling, pos, euler, speed, alpha, beta, gamma_out, vpts
                  omega_b_out, omega_ned_out):
     """The ELL solve of one formation (:func:`formation_env.wake.arrays.evaluate_formation`: pose, joint
     solve, the thesis's effective wind) and, with the ``load_weighted`` coupling, the load-weighted wind
-    in its place. Arguments as ``evaluate_formation``'s, ``coupling`` a :class:`CouplingArrays`."""
+    in its place, plus, where ``wake.residual`` is a table, every ordered pair's residual
+    (:func:`formation_env.wake.residual.add_wind_residual`). Arguments as ``evaluate_formation``'s, ``coupling`` a
+    :class:`CouplingArrays`."""
     evaluate_formation(wake, pos, euler, speed, alpha, beta, gamma_out, vpts_out, wind_ned_out, wind_b_out,
                        omega_b_out, omega_ned_out)
     if coupling.mode == LOAD_WEIGHTED:
@@ -216,3 +219,5 @@ def coupled_wind(wake, coupling, pos, euler, speed, alpha, beta, gamma_out, vpts
             dcm_ned_to_body_1(euler[v, 0], euler[v, 1], euler[v, 2], rot[v])
         load_weighted_wind(rot, vpts_out, gamma_out, coupling, wake.vehicle_panel_start, wind_ned_out, wind_b_out,
                            omega_b_out, omega_ned_out)
+        add_wind_residual(wake, wake.residual, pos, euler, gamma_out, rot, wind_ned_out, wind_b_out, omega_b_out,
+                          omega_ned_out)

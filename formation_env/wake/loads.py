@@ -133,6 +133,13 @@ def formation_benefit(model: WakeModel, state: FormationState, solution: WakeSol
         saving = np.where(np.abs(alone.drag_n) > 0, 1.0 - form.drag_n / alone.drag_n, 0.0)
     if model.saving_scale != 1.0:  # the span-efficiency correction (WakeModel saving_scale)
         saving = saving * model.saving_scale
+    if getattr(model, "residual", None) is not None:  # the residual table of pairs (the saving only; the loads are the lattice's)
+        from .residual import add_saving_residual
+
+        saving = np.array(saving, dtype=float)
+        for b in range(saving.shape[0]):
+            add_saving_residual(model.residual, np.ascontiguousarray(state.position_ned[b], dtype=float),
+                                np.ascontiguousarray(state.euler_rad[b], dtype=float), saving[b])
     out["induced_drag_saving"] = saving
     out["formation"] = form
     out["isolated"] = alone

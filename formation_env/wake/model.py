@@ -100,6 +100,13 @@ class WakeModel:
         as the lattice gives it; :func:`formation_env.wake.converged.span_efficiency_scale` is the ratio of
         the coarse to a converged lattice's isolated induced drag per unit lift squared, which removes the
         coarse lattice's 1/nseg bias of the ratio (docs/ell.md, "Converged saving"). Nothing else changes.
+    residual:
+        None (default): the lattice as it is. A :class:`~formation_env.wake.residual.ResidualTable`: every ordered
+        pair's tabulated residual (a fine lattice minus this one) is added to the induced-drag saving and to the
+        ``load_weighted`` coupling's winds of the compiled paths (:func:`formation_env.wake.coupling.coupled_wind`,
+        :func:`formation_env.wake.benefit.induced_drag_saving_one`, ``formation_benefit``); built for the
+        lift-matched Aerosonde with the sheet law and span correction (``WakeConfig(residual_table=True)``).
+        :meth:`evaluate` (the thesis's effective wind) is not corrected.
     """
 
     def __init__(
@@ -115,6 +122,7 @@ class WakeModel:
         overlap_core: float = kernels.OVERLAP_CORE_CHORD_FRACTION,
         saving_scale: float = 1.0,
         sheet: bool = False,
+        residual=None,
     ) -> None:
         vehicles = tuple(vehicles)
         if not vehicles:
@@ -138,6 +146,11 @@ class WakeModel:
             raise ValueError(f"WakeModel: sheet must be True or False, got {sheet!r}")
         if not (np.isfinite(saving_scale) and saving_scale > 0):
             raise ValueError(f"WakeModel: saving_scale must be finite and > 0, got {saving_scale!r}")
+        from .residual import ResidualTable
+
+        if residual is not None and not isinstance(residual, ResidualTable):
+            raise ValueError(f"WakeModel: residual must be None or a ResidualTable, got {type(residual).__name__}")
+        self.residual = residual
         self.vehicles = vehicles
         self.overlap_core = float(overlap_core)
         self.saving_scale = float(saving_scale)
