@@ -20,20 +20,23 @@ pitch); the position is the receiver's wing origin relative to the source's, in 
 roll minus the source's, rad. The table holds y >= 0: the pair mirrored in y (y -> -y, phi -> -phi) has the
 mirrored residual (sidewash and the rolling and yawing rotational wind change sign).
 
-Values per pose (``VALUE_*`` indices): the receiver's induced-drag saving, and for each coupling
-(``load_weighted``, ``effective_wind``) its translational and rotational wind in the pair frame (m/s, rad/s).
-Interpolation: cubic (Catmull-Rom) in y and z, where the residual has the scale of the viscous core; linear in
-x (it varies there only through the core's growth with the wake's age) and in phi. Outside the table: zero
-ahead of ``x_b[-1]``, beyond ``y`` or ``z`` range (where it has decayed below ``EDGE_TOLERANCE`` of the peak
-saving, checked when built), the last plane behind ``x_b[0]`` (semi-infinite legs) and the edge in phi.
+Values per pose (``VALUE_*`` indices): the receiver's induced-drag saving, and the ``load_weighted``
+coupling's translational and rotational wind in the pair frame (m/s, rad/s; the energy tasks' coupling; the
+thesis's effective wind is not corrected). Interpolation: cubic (Catmull-Rom) in y and z, where the residual
+has the scale of the viscous core (z on an asinh-spaced grid: 0.02 b steps on the plane, coarser off it);
+linear in x (it varies there only through the core's growth with the wake's age and near the source's wing)
+and in phi. Outside the table: zero ahead of ``x_b[-1]`` (= 1 b; measured there <= 0.35 % of the peak
+saving), beyond y = 2 b or |z| = 0.62 b (there <= 0.5 %: what is left is the coarse wing's 2 % stronger
+wake, a far field); behind ``x_b[0]`` the last plane (semi-infinite legs), beyond +-6 deg of relative roll
+the edge.
 
 Scaling: the residual's winds are proportional to the source's circulation, so they are multiplied by the
 source's lift per unit rho V (sum of Gamma times the bound vortex's spanwise extent, m^3/s) over that of the
 table's source at the trim; the saving (a ratio of the receiver's drag change to its own drag) is not scaled.
 
-The table is built once (``python -m formation_env.wake.residual``, ~N minutes on 2 cores) and shipped
-compressed in ``formation_env/data/residual_table.npz`` with the grids, the configuration and its
-provenance; :func:`load_table` reads it, ``tests/wake/test_residual.py`` re-computes slices of it.
+The table is built once (``python -m formation_env.wake.residual``: 130,000 pair solves, 243 s on 2 cores)
+and shipped compressed in ``formation_env/data/residual_table.npz`` (float16, 1.6 MB) with its grids and
+provenance; :func:`load_table` reads it, ``tests/wake/test_residual.py`` re-computes nodes of it.
 """
 
 from __future__ import annotations
@@ -47,7 +50,8 @@ import numba as nb
 import numpy as np
 
 __all__ = ["ResidualTable", "TABLE_PATH", "VALUE_SAVING", "VALUE_WIND", "N_VALUES",
-           "load_table", "pair_residual", "add_wind_residual", "add_saving_residual", "pair_values", "build_table"]
+           "TableGrid", "load_table", "save_table", "table_from_arrays", "pair_residual", "add_wind_residual",
+           "add_saving_residual", "lift_per_rho_v", "pair_values", "build_table"]
 
 VALUE_SAVING = 0
 VALUE_WIND = 1  # 6 values: the load-weighted translational (3) m/s and rotational (3) rad/s wind, pair frame
