@@ -9,6 +9,7 @@ import pytest
 
 from formation_env.sim.formation import WakeConfig
 from formation_env.verification.converged_saving import echelon_savings, follower_maps
+from formation_env.verification import residual_table as RT
 from formation_env.wake import residual as R
 
 FINE = WakeConfig(nseg=80)
@@ -29,7 +30,7 @@ def test_the_shipped_table_is_what_the_code_computes(table):
     iy = [46, 50]  # y 0.92, 1.00 b
     iz = [len(zs) // 2, len(zs) // 2 + 2]  # z 0 and the second node below the plane
     off = np.array([[xs[ix], ys[j], zs[k]] for j in iy for k in iz])
-    fresh = R.pair_values(FINE, off, rolls[ir])[0] - R.pair_values(BASE, off, rolls[ir])[0]
+    fresh = RT.pair_values(FINE, off, rolls[ir])[0] - RT.pair_values(BASE, off, rolls[ir])[0]
     shipped = np.array([table.values[ix, j, k, ir] for j in iy for k in iz])
     # the file stores float16: ~5e-4 relative
     np.testing.assert_allclose(shipped, fresh, rtol=2e-3, atol=2e-5)
