@@ -9,7 +9,8 @@ alpha), the ELL is the energy tasks' lift-matched wing (:class:`~formation_env.s
 :func:`formation_env.wake.coupling.coupled_wind` (both couplings, the follower's, NED).
 
 ``python -m formation_env.verification.converged_saving`` prints the table of docs/ell.md for the lattices
-this checkout has (nseg 10 with and without the span correction, with the sheet law, nseg 40 and 160 against
+this checkout has (nseg 10 with and without the span correction, with the sheet law, with the residual table
+of pairs, nseg 40 and 160 against
 nseg 80); the residual table's :func:`residual_table_errors` with the sheet law as its base (e.g.
 ``residual_table_errors(WakeConfig(sheet=True, span_correction=True), conditions=({}, {"roll_deg": 2.0},
 {"x_b": -2.5}))``).
@@ -200,11 +201,12 @@ def main() -> None:
     cases = {"nseg 10": WakeConfig(), "nseg 10 + span correction": WakeConfig(span_correction=True),
              "nseg 10, sheet law": WakeConfig(sheet=True),
              "nseg 10, sheet law + span corr.": WakeConfig(sheet=True, span_correction=True),
+             "nseg 10, sheet + span + residual table": WakeConfig(sheet=True, span_correction=True, residual_table=True),
              "nseg 40": WakeConfig(nseg=40), "nseg 160": WakeConfig(nseg=160)}
     print("against nseg 80; % of the reference's peak (saving) or largest |component| (winds y / z)")
     for label, cfg in cases.items():
         e = map_errors(follower_maps(cfg), reference)
-        print(f"{label:28s} saving {100 * e['saving']:5.1f} % (|z| >= 0.1 b {100 * e['saving_off_plane']:4.1f} %), "
+        print(f"{label:38s} saving {100 * e['saving']:5.1f} % (|z| >= 0.1 b {100 * e['saving_off_plane']:4.1f} %), "
               f"peak {e['peak']:.3f} at ({e['peak_y_b']:.2f}, {e['peak_z_b']:.2f}) b, maxima {e['local_maxima']} / "
               f"{e['lateral_maxima']}; load_weighted {100 * e['load_weighted_y']:.1f} / {100 * e['load_weighted_z']:.1f} %, "
               f"effective_wind {100 * e['effective_wind_y']:.1f} / {100 * e['effective_wind_z']:.1f} %")
