@@ -155,9 +155,10 @@ def wake_model_for(wake: WakeConfig, n_vehicles: int, coupling: str | None = Non
     if wake.residual_table:
         from ..wake.residual import load_table
 
-        if (resolve_coupling(wake) if coupling is None else coupling) != "load_weighted":
+        resolved = resolve_coupling(wake) if coupling is None else coupling
+        if resolved != "load_weighted":
             raise ValueError("WakeConfig: residual_table=True needs the load_weighted coupling (the table's "
-                             f"lift-matched wing), got coupling {coupling!r}")
+                             f"lift-matched wing), got coupling {resolved!r}")
         residual = load_table()
     return WakeModel([vehicle] * n_vehicles, core=wake.core, eval_points=wake.eval_points, rotational=wake.rotational,
                      viscous_aic=wake.viscous_aic, saving_scale=scale,

@@ -94,14 +94,12 @@ def lift_per_rho_v(wake, gamma, v):
 
 
 @_jit
-def _catmull_rom(t, w):
-    """Cubic convolution (Catmull-Rom) weights of the four nodes around fraction ``t`` in [0, 1]."""
+def _catmull_rom(t):
+    """Cubic convolution (Catmull-Rom) weights of the four nodes around fraction ``t`` in [0, 1] (a tuple:
+    the lookup runs per pair and ELL solve, so nothing is allocated)."""
     t2 = t * t
     t3 = t2 * t
-    w[0] = -0.5 * t3 + t2 - 0.5 * t
-    w[1] = 1.5 * t3 - 2.5 * t2 + 1.0
-    w[2] = -1.5 * t3 + 2.0 * t2 + 0.5 * t
-    w[3] = 0.5 * t3 - 0.5 * t2
+    return (-0.5 * t3 + t2 - 0.5 * t, 1.5 * t3 - 2.5 * t2 + 1.0, -1.5 * t3 + 2.0 * t2 + 0.5 * t, 0.5 * t3 - 0.5 * t2)
 
 
 @_jit
@@ -147,10 +145,8 @@ def pair_residual(tab, px, py, pz, roll, k0, nk, out):
     ir, fr = _linear_index(tab.roll0_rad, tab.roll_step_rad, nr, r)
     iy = min(int(math.floor(uy)), ny - 2)
     iz = min(int(math.floor(uz)), nz - 2)
-    wy = np.empty(4)
-    wz = np.empty(4)
-    _catmull_rom(uy - iy, wy)
-    _catmull_rom(uz - iz, wz)
+    wy = _catmull_rom(uy - iy)
+    wz = _catmull_rom(uz - iz)
     for a in range(2):
         wa = (1.0 - fx) if a == 0 else fx
         if wa == 0.0:
@@ -166,13 +162,10 @@ def pair_residual(tab, px, py, pz, roll, k0, nk, out):
                     w = wc * wy[p] * wz[q]
                     for k in range(nk):
                         out[k] += w * vals[ix + a, jy, jz, ir + c, k0 + k]
-    if mirror:
-        if k0 == VALUE_SAVING:
-            pass
-        else:  # a wind block (3 translational, 3 rotational): mirror y of a vector, x and z of a pseudo-vector
-            out[1] = -out[1]
-            out[3] = -out[3]
-            out[5] = -out[5]
+    if mirror and k0 == VALUE_WIND:  # the wind block: mirror y of a vector (the wind), x and z of a pseudo-vector
+        out[1] = -out[1]
+        out[3] = -out[3]
+        out[5] = -out[5]
     return True
 
 

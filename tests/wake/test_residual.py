@@ -91,3 +91,24 @@ def test_the_switch_is_checked():
     with pytest.raises(ValueError, match="load_weighted coupling"):
         wake_model_for(dataclasses.replace(TABLE, coupling="effective_wind"), 2)
     assert wake_model_for(BASE, 2).residual is None
+
+
+def test_the_corrected_saving_does_not_depend_on_the_heading():
+    """Frame invariance: a formation turned about the vertical (positions and headings) keeps its savings, the
+    table's pair frame included (the batch API applies the table as the env does)."""
+    from formation_env.sim.formation import wake_model_for
+    from formation_env.wake import FormationState
+    from formation_env.wake.benefit import induced_drag_saving
+
+    model = wake_model_for(dataclasses.replace(TABLE, coupling="load_weighted"), 3)
+    offs = np.array([[0.0, 0.0, 0.0], [-2.0, 0.93, 0.02], [-4.0, -0.9, 0.05]]) * 2.9
+    savings = []
+    for psi in (0.0, 0.7, -2.5):
+        c, s = np.cos(psi), np.sin(psi)
+        pos = offs @ np.array([[c, s, 0.0], [-s, c, 0.0], [0.0, 0.0, 1.0]])
+        euler = np.array([[0.02, 0.05, psi]] * 3)
+        savings.append(induced_drag_saving(model, FormationState(pos[None], euler[None], np.full((1, 3), 25.0),
+                                                                 np.full((1, 3), 0.05), np.zeros((1, 3))))[0])
+    assert savings[0][1] > 0.3  # the follower in the wake: the table contributes there
+    np.testing.assert_allclose(savings[1], savings[0], atol=1e-9)
+    np.testing.assert_allclose(savings[2], savings[0], atol=1e-9)
