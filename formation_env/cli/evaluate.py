@@ -32,6 +32,7 @@ def register(sub) -> None:
 
     from ..scenarios import scenario_names
     from ..sim.config import TURBULENCE_FIELD_ALIASES, TURBULENCE_FIELDS
+    from ..wake.coupling import WAKE_FIDELITIES
 
     p = sub.add_parser("evaluate", help="evaluate policies against the PID baselines on held-out seeds (wake + turbulence)")
     p.add_argument("--policy", action="append", required=True,
@@ -54,6 +55,10 @@ def register(sub) -> None:
                    help="von_karman (default) or dryden: one frozen spatial field per formation; lanes (old name "
                         "frozen): the earlier Cholesky-mixed Dryden lanes; independent: one Dryden stream per UAV")
     p.add_argument("--no-wake", action="store_true", help="switch the ELL wake off (default on)")
+    p.add_argument("--wake-fidelity", default=None, choices=WAKE_FIDELITIES,
+                   help="how finely the ELL resolves the wake (default: the scenario's; converged in close_formation "
+                        "and the N-UAV close formations, lattice elsewhere): lattice (the thesis's discrete legs), "
+                        "sheet (the sheet law), converged (sheet law, span correction, residual table of pairs)")
     p.add_argument("--benefit", action="store_true", help="also compute the ELL induced-drag saving (slow)")
     p.add_argument("--action-mode", default=None, choices=ACTION_MODES,
                    help="action mode of the zips when no sidecar JSON / config.yaml says it")
@@ -112,7 +117,7 @@ def run(args) -> int:
                               seeds=args.seeds, wake=not args.no_wake, compute_benefit=args.benefit,
                               action_mode=args.action_mode, out_dir=out, overwrite=args.overwrite,
                               plots=not args.no_plots, duration_s=args.duration, turbulence_field=args.turbulence_field,
-                              ablations=args.ablate or (), log=print, **({} if args.bootstrap_resamples is None else {"n_boot": args.bootstrap_resamples}))
+                              wake_fidelity=args.wake_fidelity, ablations=args.ablate or (), log=print, **({} if args.bootstrap_resamples is None else {"n_boot": args.bootstrap_resamples}))
         print(res["table_markdown"])
         print(f"wrote {out}/levels.md, levels.json and " + ", ".join(f"sigma_{v:g}/" for v in levels))
         return 0
@@ -120,7 +125,7 @@ def run(args) -> int:
                    turbulence_sigma_mps=levels[0], wake=not args.no_wake, compute_benefit=args.benefit,
                    action_mode=args.action_mode, out_dir=out, overwrite=args.overwrite, plots=not args.no_plots,
                    duration_s=args.duration, turbulence_field=args.turbulence_field, ablations=args.ablate or (),
-                   log=print,
+                   wake_fidelity=args.wake_fidelity, log=print,
                    **({} if args.bootstrap_resamples is None else {"n_boot": args.bootstrap_resamples}))
     print(rep["table_markdown"])
     if rep["comparison_markdown"]:

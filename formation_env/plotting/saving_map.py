@@ -32,7 +32,7 @@ def plot_map(path, cache: dict | None = None, *, y_b=None, z_b=None, overwrite: 
     cf = ax.contourf(m.y_b, m.z_b, np.clip(m.follower.T, -0.6, 0.6), levels=levels, cmap="RdBu_r", extend="both")
     in_band = np.broadcast_to(np.abs(m.z_b) < z_ex, m.follower.shape)
     outside = np.ma.masked_where(in_band, m.follower).T  # no isolines in the band
-    cs = ax.contour(m.y_b, m.z_b, outside, levels=[0.15, 0.25, 0.30, 0.35], colors="k", linewidths=0.6)
+    cs = ax.contour(m.y_b, m.z_b, outside, levels=[0.15, 0.25, 0.35, 0.45], colors="k", linewidths=0.6)
     ax.clabel(cs, fmt=lambda v: f"{100 * v:.0f} %", fontsize=7)
     fig.colorbar(cf, ax=ax, label="follower induced-drag saving", ticks=np.linspace(-0.6, 0.6, 7))
     ax.axhspan(-z_ex, z_ex, facecolor="none", edgecolor="0.3", hatch="///", linewidth=0.0)
@@ -43,7 +43,8 @@ def plot_map(path, cache: dict | None = None, *, y_b=None, z_b=None, overwrite: 
     ax.plot(port[1], port[2], "*", ms=11, mfc="none", mec="k", label="port mirror")
     ax.plot(THESIS_SLOT_B[1], THESIS_SLOT_B[2], "X", ms=10, mfc="w", mec="k",
             label=f"thesis slot (1, 0.3) b: {100 * c['thesis_slot_saving']:.1f} %")
-    ax.plot([], [], " ", label=f"hatched: |z| < {z_ex:g} b excluded")
+    if z_ex > 0:  # the nseg-10 lattice's artefact band (the converged wake has none)
+        ax.plot([], [], " ", label=f"hatched: |z| < {z_ex:g} b excluded")
     ax.set_xlabel("y / b (starboard)")
     ax.set_ylabel("z / b (down)")
     ax.invert_yaxis()
@@ -56,7 +57,8 @@ def plot_map(path, cache: dict | None = None, *, y_b=None, z_b=None, overwrite: 
     s0 = slot_savings(np.stack([np.full_like(yl, x_b), yl, np.zeros_like(yl)], -1), **model_kw)[:, 1]
     sz = slot_savings(np.stack([np.full_like(zl, x_b), np.full_like(zl, opt[1]), zl], -1), **model_kw)[:, 1]
     a1 = fig.add_subplot(gs[1, 0])
-    a1.plot(yl, 100 * s0, color="0.65", lw=0.8, label="z = 0 (in the band)")
+    if z_ex > 0:
+        a1.plot(yl, 100 * s0, color="0.65", lw=0.8, label="z = 0 (in the band)")
     a1.plot(yl, 100 * sy, "C0", label=f"z = {opt[2]:.2f} b")
     a1.axvline(opt[1], color="k", ls=":", lw=0.8)
     a1.set_ylim(-60, 110)
@@ -67,7 +69,8 @@ def plot_map(path, cache: dict | None = None, *, y_b=None, z_b=None, overwrite: 
     a2 = fig.add_subplot(gs[1, 1])
     inb = np.abs(zl) < z_ex
     a2.plot(zl, np.where(inb, np.nan, 100 * sz), "C0", label=f"y = {opt[1]:.3f} b")
-    a2.plot(zl, np.where(inb, 100 * sz, np.nan), color="0.65", lw=0.8, label="excluded band")
+    if z_ex > 0:
+        a2.plot(zl, np.where(inb, 100 * sz, np.nan), color="0.65", lw=0.8, label="excluded band")
     a2.axvspan(-z_ex, z_ex, color="0.85", zorder=0)
     a2.axvline(opt[2], color="k", ls=":", lw=0.8)
     a2.set_xlabel("z / b (down)")

@@ -114,10 +114,11 @@ class Scenario:
     # how the ELL's wake reaches the 6-DOF unless EnvConfig.wake_coupling says otherwise
     # (formation_env.wake.coupling.COUPLINGS): the thesis's "effective_wind", or "load_weighted" (the energy tasks)
     wake_coupling: str = "effective_wind"
-    # the ELL's sheet law (formation_env.wake.WakeModel sheet: the other vehicles' trailing legs as a continuous
-    # sheet near their wake plane) unless the WakeConfig says otherwise: False the thesis's discrete legs
-    # (docs/ell.md "Converged saving")
-    wake_sheet: bool = False
+    # how finely the ELL resolves the wake another vehicle meets unless EnvConfig.wake_fidelity or the WakeConfig
+    # says otherwise (formation_env.sim.formation.WAKE_FIDELITIES): "lattice" the thesis's discrete legs, "sheet"
+    # the sheet law, "converged" the sheet law, span correction and residual table of pairs (the energy tasks';
+    # docs/ell.md "Converged saving")
+    wake_fidelity: str = "lattice"
     # the neighbours an agent observes unless EnvConfig.neighbour_count says otherwise: 0 every other UAV in
     # index order (the observation grows with the formation); k the k nearest by slot (one size for any formation)
     neighbour_count: int = 0
@@ -133,8 +134,10 @@ class Scenario:
 
         if self.wake_coupling not in COUPLINGS:
             raise ValueError(f"Scenario.wake_coupling must be one of {tuple(COUPLINGS)}, got {self.wake_coupling!r}")
-        if not isinstance(self.wake_sheet, bool):
-            raise ValueError(f"Scenario.wake_sheet must be True or False, got {self.wake_sheet!r}")
+        from ..wake.coupling import WAKE_FIDELITIES
+
+        if self.wake_fidelity not in WAKE_FIDELITIES:
+            raise ValueError(f"Scenario.wake_fidelity must be one of {WAKE_FIDELITIES}, got {self.wake_fidelity!r}")
         if isinstance(self.neighbour_count, bool) or not isinstance(self.neighbour_count, int) or not 0 <= self.neighbour_count <= 64:
             raise ValueError(f"Scenario.neighbour_count must be an integer in 0..64 (0: every other UAV), got "
                              f"{self.neighbour_count!r}")

@@ -298,6 +298,13 @@ class EnvConfig:
         load-weighted wind: the 6-DOF's lift, drag and rolling-moment increments are the ELL's); None (default):
         the scenario's (``load_weighted`` in the energy tasks close_formation and wake_surfing, the thesis's
         elsewhere).
+    wake_fidelity: how finely the ELL resolves the wake another vehicle meets
+        (:data:`formation_env.sim.formation.WAKE_FIDELITIES`): "lattice" (the thesis's 10 horseshoes per wing and
+        discrete trailing legs), "sheet" (the other vehicles' legs as a continuous sheet near their wake plane) or
+        "converged" (the sheet law, span correction and residual table of pairs: the saving and load-weighted wind
+        of an nseg-80 lattice, within 0.2 % of its peak, at the nseg-10 cost; needs the load_weighted coupling);
+        None (default): the scenario's ("converged" in close_formation and the N-UAV close formations, "lattice"
+        elsewhere).
     neighbour_count: the other UAVs each agent observes (the ``neighbours`` group): 0 every other UAV in index
         order (6 (V - 1) values: the size grows with the formation); k >= 1 the k whose slots are nearest the
         agent's, nearest first (6 k values whatever the formation's size, so one policy flies an echelon of 3,
@@ -317,6 +324,7 @@ class EnvConfig:
     wake_update_every: int = 1
     turbulence_field: str = "von_karman"
     wake_coupling: str | None = None
+    wake_fidelity: str | None = None
     neighbour_count: int | None = None
     reward: RewardWeights = field(default_factory=RewardWeights)
     randomisation: Randomisation = field(default_factory=Randomisation)
@@ -366,6 +374,12 @@ class EnvConfig:
             if not isinstance(self.wake_coupling, str) or self.wake_coupling not in COUPLINGS:
                 raise ValueError(f"EnvConfig: wake_coupling must be None or one of {tuple(COUPLINGS)}, "
                                  f"got {self.wake_coupling!r}")
+        if self.wake_fidelity is not None:
+            from ..wake.coupling import WAKE_FIDELITIES
+
+            if not isinstance(self.wake_fidelity, str) or self.wake_fidelity not in WAKE_FIDELITIES:
+                raise ValueError(f"EnvConfig: wake_fidelity must be None (the scenario's) or one of {WAKE_FIDELITIES}, "
+                                 f"got {self.wake_fidelity!r}")
         if self.neighbour_count is not None:
             k = self.neighbour_count
             if isinstance(k, (bool, np.bool_)) or not isinstance(k, (int, np.integer)) or not 0 <= k <= 64:

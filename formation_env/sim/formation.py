@@ -20,6 +20,7 @@ the episode.
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass
 
 import numpy as np
@@ -29,12 +30,14 @@ from ..aircraft.state import POS, QUAT
 from ..frames import dcm_body_to_ned_from_quaternion, euler_from_quaternion
 from ..geometry import Vehicle, aerosonde
 from ..wake import FormationState, WakeModel
-from ..wake.coupling import COUPLINGS, lift_matched_vehicle
+from ..wake.coupling import COUPLINGS, WAKE_FIDELITIES, lift_matched_vehicle
 
 
-__all__ = ["WakeConfig", "ell_state_from_aircraft", "wake_model_for", "wake_vehicle", "resolve_coupling",
-           "resolve_sheet",
-           "wing_origin_body"]
+__all__ = ["WakeConfig", "WAKE_FIDELITIES", "ell_state_from_aircraft", "wake_model_for", "wake_vehicle",
+           "resolve_coupling", "resolve_fidelity", "resolve_sheet", "resolve_wake", "wing_origin_body"]
+
+# the sheet law, span correction and residual table each wake fidelity (WAKE_FIDELITIES) sets
+_FIDELITY_FLAGS = {"lattice": (False, False, False), "sheet": (True, False, False), "converged": (True, True, True)}
 
 
 @dataclass(frozen=True)
@@ -53,31 +56,31 @@ class WakeConfig:
     # or "load_weighted" (consistent with the ELL's loads; the energy tasks'); None: EnvConfig.wake_coupling,
     # else the scenario's (resolve_coupling)
     coupling: str | None = None
+    # The next three say how finely the wake is resolved; None: what the wake fidelity (EnvConfig.wake_fidelity, else
+    # the scenario's, else "lattice": WAKE_FIDELITIES) sets (resolve_wake), an explicit value overrides it.
     # the span-efficiency correction of the induced-drag saving (WakeModel saving_scale =
     # formation_env.wake.converged.span_efficiency_scale: the coarse lattice's 1/nseg bias of the ratio removed);
-    # False: the lattice's own ratio (the thesis, and every default; docs/ell.md "Converged saving")
-    span_correction: bool = False
+    # False: the lattice's own ratio (the thesis; docs/ell.md "Converged saving")
+    span_correction: bool | None = None
     # the ELL's sheet law (WakeModel sheet: the other vehicles' trailing legs as a continuous sheet near their
-    # wake plane; False the thesis's discrete legs); None: the scenario's wake_sheet (resolve_sheet)
+    # wake plane; False the thesis's discrete legs)
     sheet: bool | None = None
     # the residual table of pairs on top of the sheet law and span correction (formation_env.wake.residual: the
     # saving and both couplings' winds of a fine nseg-80 lattice at the coarse lattice's cost); requires
-    # sheet=True, span_correction=True, nseg 10, no tailplane (what the table was built for)
-    residual_table: bool = False
+    # the sheet law, span correction, nseg 10, no tailplane and the load_weighted coupling (what it was built for)
+    residual_table: bool | None = None
 
     def __post_init__(self) -> None:
-        if not isinstance(self.residual_table, bool):
-            raise ValueError(f"WakeConfig: residual_table must be True or False, got {self.residual_table!r}")
-        if self.residual_table and not (self.sheet is True and self.span_correction and self.nseg == 10
-                                        and not self.tailplane):
+        for name in ("span_correction", "sheet", "residual_table"):
+            v = getattr(self, name)
+            if v is not None and not isinstance(v, bool):
+                raise ValueError(f"WakeConfig: {name} must be None, True or False, got {v!r}")
+        if self.residual_table and not (self.sheet is not False and self.span_correction is not False
+                                        and self.nseg == 10 and not self.tailplane):
             raise ValueError("WakeConfig: residual_table=True needs sheet=True, span_correction=True, nseg=10 and "
                              f"tailplane=False (the table's base), got sheet={self.sheet!r}, "
                              f"span_correction={self.span_correction!r}, nseg={self.nseg!r}, "
                              f"tailplane={self.tailplane!r}")
-        if self.sheet is not None and not isinstance(self.sheet, bool):
-            raise ValueError(f"WakeConfig: sheet must be None, True or False, got {self.sheet!r}")
-        if not isinstance(self.span_correction, bool):
-            raise ValueError(f"WakeConfig: span_correction must be True or False, got {self.span_correction!r}")
         if self.coupling is not None and self.coupling not in COUPLINGS:
             raise ValueError(f"WakeConfig: coupling must be None or one of {tuple(COUPLINGS)}, got {self.coupling!r}")
         if not isinstance(self.update_every, int) or self.update_every < 1:
@@ -118,13 +121,45 @@ def resolve_coupling(wake: WakeConfig, config=None, scenario=None) -> str:
     return "effective_wind"
 
 
+def resolve_fidelity(config=None, scenario=None) -> str:
+    """The wake fidelity a simulation flies (:data:`WAKE_FIDELITIES`): ``config.wake_fidelity`` (an EnvConfig)
+    if set, else ``scenario.wake_fidelity``, else the thesis's "lattice"."""
+    for source in (getattr(config, "wake_fidelity", None), getattr(scenario, "wake_fidelity", None)):
+        if source is not None:
+            return source
+    return "lattice"
+
+
+def resolve_wake(wake: WakeConfig, config=None, scenario=None) -> WakeConfig:
+    """``wake`` with every choice made: the coupling (:func:`resolve_coupling`) and the sheet law, span
+    correction and residual table that are None in ``wake`` set by the wake fidelity (:func:`resolve_fidelity`).
+    The converged fidelity's table applies only to the wake it was built for; asked for elsewhere (another
+    lattice, a tailplane or the effective-wind coupling) it is one clear error, naming the lighter fidelities."""
+    fidelity = resolve_fidelity(config, scenario)
+    if fidelity not in _FIDELITY_FLAGS:
+        raise ValueError(f"wake fidelity must be one of {WAKE_FIDELITIES}, got {fidelity!r}")
+    sheet, span, table = _FIDELITY_FLAGS[fidelity]
+    resolved = dataclasses.replace(
+        wake, coupling=resolve_coupling(wake, config, scenario),
+        sheet=sheet if wake.sheet is None else wake.sheet,
+        span_correction=span if wake.span_correction is None else wake.span_correction,
+        residual_table=table if wake.residual_table is None else wake.residual_table)
+    if resolved.residual_table and not (resolved.sheet and resolved.span_correction and resolved.nseg == 10
+                                        and not resolved.tailplane and resolved.coupling == "load_weighted"):
+        raise ValueError(f"wake fidelity {fidelity!r}: the residual table needs the sheet law, span correction, "
+                         f"nseg 10, no tailplane and the load_weighted coupling (what it was built for), got "
+                         f"sheet={resolved.sheet}, span_correction={resolved.span_correction}, nseg={resolved.nseg}, "
+                         f"tailplane={resolved.tailplane}, coupling={resolved.coupling!r}; fly wake_fidelity "
+                         f"'sheet' or 'lattice' for another wake")
+    return resolved
+
+
 def resolve_sheet(wake: WakeConfig, scenario=None) -> bool:
     """Whether a simulation's ELL takes the sheet law (:class:`WakeModel`'s ``sheet``): ``wake.sheet`` if
-    set, else ``scenario.wake_sheet``, else False (the thesis)."""
-    for source in (wake.sheet, getattr(scenario, "wake_sheet", None)):
-        if source is not None:
-            return bool(source)
-    return False
+    set, else what the scenario's wake fidelity sets (:func:`resolve_wake`)."""
+    if wake.sheet is not None:
+        return bool(wake.sheet)
+    return _FIDELITY_FLAGS[resolve_fidelity(None, scenario)][0]
 
 
 def wake_vehicle(wake: WakeConfig, coupling: str | None = None) -> Vehicle:
@@ -145,6 +180,9 @@ def wake_model_for(wake: WakeConfig, n_vehicles: int, coupling: str | None = Non
     :func:`~formation_env.wake.converged.span_efficiency_scale`; ``sheet`` None: :func:`resolve_sheet` of ``wake``."""
     if not wake.enabled or n_vehicles < 2:
         return None
+    if coupling is not None:
+        wake = dataclasses.replace(wake, coupling=coupling)
+    wake = resolve_wake(wake)  # the Nones as the thesis's lattice sets them
     vehicle = wake_vehicle(wake, coupling)
     scale = 1.0
     if wake.span_correction:
@@ -155,11 +193,7 @@ def wake_model_for(wake: WakeConfig, n_vehicles: int, coupling: str | None = Non
     if wake.residual_table:
         from ..wake.residual import load_table
 
-        resolved = resolve_coupling(wake) if coupling is None else coupling
-        if resolved != "load_weighted":
-            raise ValueError("WakeConfig: residual_table=True needs the load_weighted coupling (the table's "
-                             f"lift-matched wing), got coupling {resolved!r}")
         residual = load_table()
     return WakeModel([vehicle] * n_vehicles, core=wake.core, eval_points=wake.eval_points, rotational=wake.rotational,
                      viscous_aic=wake.viscous_aic, saving_scale=scale,
-                     sheet=resolve_sheet(wake) if sheet is None else bool(sheet), residual=residual)
+                     sheet=bool(wake.sheet) if sheet is None else bool(sheet), residual=residual)

@@ -38,7 +38,7 @@ from ..wake import WakeModel
 from ..wake.coupling import coupling_arrays
 from ..wake.loads import isolated_model
 from .config import EnvConfig
-from .formation import WakeConfig, resolve_coupling, resolve_sheet, wake_model_for, wake_vehicle, wing_origin_body
+from .formation import WakeConfig, resolve_fidelity, resolve_wake, wake_model_for, wake_vehicle, wing_origin_body
 from .infos import INFO_REWARD_KEYS, InfoArrays, finite_values, reward_info_key, separation_each
 from .observe import REWARD_TERMS, observation_size
 from .params import (TURBULENCE_CODES, ActionParams, RewardParams, StepParams, aircraft_arrays, scenario_arrays,
@@ -119,11 +119,13 @@ class Simulation:
         fc = PIDFlightControl.from_trim(self.trim, dt=sc.dt).config
         self.surface_limit_rad = float(fc.surface_limit_rad)
         self.throttle_limits = tuple(float(x) for x in fc.throttle_limits)
-        wc = wake_config if wake_config is not None else WakeConfig()
-        self.wake_coupling = resolve_coupling(wc, config, sc)  # how the wake reaches the 6-DOF
-        vehicle = wake_vehicle(wc, self.wake_coupling)
-        self.wake_model = (wake_model_for(wc, v, self.wake_coupling, resolve_sheet(wc, sc)) if self.wake
-                           else None)
+        # every wake choice made (coupling; sheet law, span correction, residual table from the wake fidelity)
+        wc = resolve_wake(wake_config if wake_config is not None else WakeConfig(), config, sc)
+        self.wake_config = wc
+        self.wake_coupling = wc.coupling  # how the wake reaches the 6-DOF
+        self.wake_fidelity = resolve_fidelity(config, sc)
+        vehicle = wake_vehicle(wc)
+        self.wake_model = wake_model_for(wc, v) if self.wake else None
         self.wing_origin_body = wing_origin_body(AEROSONDE)
         lattice = self.wake_model or WakeModel([vehicle])  # the kernel needs arrays even without wake
         alone = isolated_model(vehicle, wc.core, wc.eval_points, wc.rotational, lattice.kinematic_viscosity,

@@ -38,11 +38,18 @@ from .arrays import evaluate_formation
 from .posing import dcm_ned_to_body_1
 from .residual import add_wind_residual
 
-__all__ = ["COUPLINGS", "EFFECTIVE_WIND", "LOAD_WEIGHTED", "CouplingArrays", "coupling_arrays", "coupling_code",
+__all__ = ["COUPLINGS", "WAKE_FIDELITIES", "EFFECTIVE_WIND", "LOAD_WEIGHTED", "CouplingArrays", "coupling_arrays", "coupling_code",
            "lift_matched_incidence_rad", "lift_matched_vehicle", "roll_weights", "load_weighted_wind", "coupled_wind"]
 
 EFFECTIVE_WIND, LOAD_WEIGHTED = 0, 1
 COUPLINGS = {"effective_wind": EFFECTIVE_WIND, "load_weighted": LOAD_WEIGHTED}
+#: how finely the ELL resolves the wake another vehicle meets (a scenario's and EnvConfig's ``wake_fidelity``;
+#: resolved into a WakeConfig by formation_env.sim.formation.resolve_wake): "lattice" the thesis's nseg-10
+#: horseshoes with discrete trailing legs (the saving ripples with the leg spacing within ~0.1 b of a wake plane);
+#: "sheet" the other vehicles' legs as a continuous sheet near their wake plane; "converged" the sheet law, the
+#: span-efficiency correction and the residual table of pairs (the saving and load-weighted wind of an nseg-80
+#: lattice at the nseg-10 cost: the energy tasks', docs/ell.md)
+WAKE_FIDELITIES = ("lattice", "sheet", "converged")
 
 _jit = nb.njit(cache=True, error_model="numpy")
 

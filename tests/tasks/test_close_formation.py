@@ -60,30 +60,34 @@ def test_the_optimum_beats_the_thesis_slot(cache, optimum):
 
 def test_port_and_starboard_optima_mirror(optimum):
     port = cfm.find_optimum(z_exclusion_b=optimum.z_exclusion_b, side="port")
-    assert port.offset_b[1] == pytest.approx(-optimum.offset_b[1], abs=2e-3)
-    assert port.offset_b[2] == pytest.approx(optimum.offset_b[2], abs=1e-9)
-    assert port.saving == pytest.approx(optimum.saving, abs=1e-3)
+    # the optimum is flat laterally (0.05 b inboard loses 0.013): the trim's small heading and roll move the argmax
+    # of the two sides apart by 0.007 b and their savings by 8e-4
+    assert port.offset_b[1] == pytest.approx(-optimum.offset_b[1], abs=0.01)
+    assert port.offset_b[2] == pytest.approx(optimum.offset_b[2], abs=1e-3)
+    assert port.saving == pytest.approx(optimum.saving, abs=1.5e-3)
     # the map is mirror symmetric too (up to the trim's tiny heading, -0.0006 rad)
     m = cfm.saving_map(-2.0, [-1.2, -0.96, -0.5, 0.5, 0.96, 1.2], [-0.3, 0.1, 0.25])
     np.testing.assert_allclose(m.follower, m.follower[::-1], atol=1e-3)
     np.testing.assert_allclose(m.leader, m.leader[::-1], atol=1e-3)
 
 
-def test_the_excluded_band_is_respected(cache, optimum):
-    z_ex = cache["z_exclusion_b"]
-    assert abs(optimum.offset_b[2]) >= z_ex - 1e-9 and optimum.on_band_edge
-    for _, z in [(o, o[2]) for o, _ in optimum.candidates]:
-        assert abs(z) >= z_ex - 1e-9
+def test_the_converged_map_needs_no_band_where_the_lattice_did(cache, optimum):
+    """The converged wake (the task's) is single-peaked sideways at every height down to the wake plane, so the
+    task excludes no band and its optimum lies on the plane; the nseg-10 lattice ripples within 0.1 b of the plane
+    (its discrete legs) and reads an unphysical ~100 % saving on it, which is why its band existed."""
+    assert cache["z_exclusion_b"] == cache["z_exclusion_measured_b"] == 0.0
+    assert abs(optimum.offset_b[2]) < 0.005 and not optimum.on_band_edge
+    rp = cfm.ripple_profile([-0.05, 0.0, 0.05])
+    assert rp["excess_variation"].max() <= cache["parameters"]["ripple"]["tol"] == 1e-3
+    assert np.all(rp["n_local_maxima"] == 1)
+    assert rp["peak_saving"][1] == pytest.approx(optimum.saving, abs=2e-3) and rp["peak_saving"][1] < 0.6
     wider = cfm.find_optimum(z_exclusion_b=0.2, grid_step_b=0.1)
     assert abs(wider.offset_b[2]) >= 0.2 - 1e-9
-    assert wider.saving < optimum.saving
-    # the band is where the discrete trailing legs make the lateral profile ripple; outside it
-    # every profile has one peak
-    rp = cfm.ripple_profile([-z_ex, -0.05, 0.0, 0.05, z_ex])
-    assert rp["excess_variation"][[0, 4]].max() <= cache["parameters"]["ripple"]["tol"]
-    assert np.all(rp["n_local_maxima"][[0, 4]] == 1)
-    assert rp["excess_variation"][1:4].min() > 0.1 and np.all(rp["n_local_maxima"][1:4] > 3)
-    assert rp["peak_saving"][2] > 0.9  # unphysical: near-zero induced drag on the vortex sheet
+    assert wider.saving < optimum.saving - 0.2  # 0.1 b off the plane already loses 40 %
+    lat = cfm.ripple_profile([-0.05, 0.0, 0.05, cfm.LATTICE_Z_EXCLUSION_B], wake=cfm.LATTICE_WAKE)
+    assert lat["excess_variation"][:3].min() > 0.1 and np.all(lat["n_local_maxima"][:3] > 3)
+    assert lat["peak_saving"][1] > 0.9  # the lattice on its own legs: near-zero induced drag
+    assert lat["excess_variation"][3] <= 1e-4 and lat["n_local_maxima"][3] == 1
     with pytest.raises(ValueError, match="z_exclusion_b"):
         cfm.find_optimum(z_exclusion_b=0.6)
     with pytest.raises(ValueError, match="side"):
@@ -97,7 +101,7 @@ def test_scenario_and_gym_id(cache):
     slot = np.array(sc.slots[0].offset_and_rate(0.0)[0]) / sc.slots[0].span_m
     np.testing.assert_allclose(slot, cache["scenario_slot_b"], atol=1e-12)
     np.testing.assert_allclose(slot, cache["optimum"]["offset_b"], atol=0.005 + 1e-9)
-    assert "37 %" in sc.description and f"{100 * cache['scenario_slot_saving']:.0f} %" in sc.description
+    assert "56 %" in sc.description and f"{100 * cache['scenario_slot_saving']:.0f} %" in sc.description
     assert GYM_IDS["formation_env/CloseFormation-v0"] == ("close_formation", 1)
     env = gym.make("formation_env/CloseFormation-v0", duration_s=1.0, action_mode="residual", compute_benefit=True)
     obs, _ = env.reset(seed=0)
@@ -129,4 +133,4 @@ def test_env_benefit_is_the_ell_saving_of_the_last_physics_step():
         got = [infos[a]["induced_drag_saving"] for a in env.possible_agents]
         np.testing.assert_allclose(got, ref["induced_drag_saving"][0], rtol=0, atol=1e-9)
         seen.append(got[1])
-    assert 0.3 < np.mean(seen) < 0.45  # the follower starts at the optimum (36 % there)
+    assert 0.45 < np.mean(seen) < 0.6  # the follower starts at the optimum (56 % there)

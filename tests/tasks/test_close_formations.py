@@ -40,10 +40,11 @@ def test_two_ships_reduce_to_the_close_formation_map():
     np.testing.assert_allclose(opt.formation_savings(pts[:, None, :]), two_ship.slot_savings(pts), atol=1e-12)
 
 
-def test_the_joint_optimum_is_a_local_maximum_on_the_band_edge():
+def test_the_joint_optimum_is_a_local_maximum_on_the_wake_planes():
     """No per-rank step moved by 0.02 b (one at a time, inside the bounds) raises the vee's formation saving, its
-    vertical steps sit on the band's edge (the saving grows towards the wake plane, as for 2 UAVs), and the vee is
-    symmetric (starboard and port followers save alike)."""
+    vertical steps lie on the wake plane of the UAV ahead (within 0.005 b: the converged wake has no artefact band,
+    as for 2 UAVs), inside the search's bounds, and the vee is symmetric (starboard and port followers save
+    alike)."""
     o = opt.optimum("vee5")["optimum"]
     lay = opt.FORMATIONS["vee5"]
     steps = np.asarray(o["steps_b"])
@@ -58,8 +59,9 @@ def test_the_joint_optimum_is_a_local_maximum_on_the_band_edge():
                 if lo <= st[r, ax] <= hi:
                     trials.append(st)
     moved = opt.formation_savings(opt.layout_offsets(lay, np.asarray(trials))).mean(axis=-1)
-    assert np.all(moved <= base + 1e-6)
-    assert all(o["on_band_edge"])
+    assert np.all(moved <= base + 5e-5)  # flat to 1e-5 of it: the residual table is smooth to its interpolation
+    assert not any(o["on_band_edge"])
+    assert np.all(np.abs(steps[:, 1]) < 0.005) and np.all(steps[:, 1] > opt.DZ_RANGE_B[0] + 0.1)
     s = np.asarray(o["savings"])
     np.testing.assert_allclose(s[1::2], s[2::2], atol=5e-4)
     # the followers save far more than the leader, and a rank further back more than the one ahead

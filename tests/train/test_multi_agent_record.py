@@ -28,7 +28,11 @@ def _refly_two(rec: dict, task: str, name: str) -> dict:
     recorded harvest ratio and formation saving (the record rounds to 6 digits). Returns the policy's columns."""
     cols = rec["episodes"][name]
     pol = load_policy(str(ROOT / f"{name}.zip"))
-    eps = run_episodes(pol, eval_env_config(task, pol.action_mode, turbulence_sigma_mps=1.0), cols["seed"][:2])
+    # flown with the wake fidelity the record was made with (the records before issue 23 part 7 name none: the
+    # nseg-10 lattice, which the N-UAV tasks flew until they moved to the converged wake)
+    cfg = eval_env_config(task, pol.action_mode, turbulence_sigma_mps=1.0,
+                          wake_fidelity=rec.get("wake_fidelity", "lattice"))
+    eps = run_episodes(pol, cfg, cols["seed"][:2])
     for key in ("harvest_ratio", "formation_saving"):
         assert [e[key] for e in eps] == pytest.approx(cols[key][:2], rel=1e-5, abs=1e-6)
     return cols

@@ -83,8 +83,10 @@ def test_the_lookup_keeps_the_mirror_symmetry_and_stops_at_its_reach(table):
 
 def test_the_switch_is_checked():
     with pytest.raises(ValueError, match="residual_table=True needs sheet=True"):
-        WakeConfig(residual_table=True)
-    with pytest.raises(ValueError, match="residual_table must be True or False"):
+        WakeConfig(residual_table=True, sheet=False)
+    with pytest.raises(ValueError, match="residual_table=True needs sheet=True"):
+        WakeConfig(residual_table=True, nseg=20)
+    with pytest.raises(ValueError, match="residual_table must be None, True or False"):
         WakeConfig(residual_table=1)
     from formation_env.sim.formation import wake_model_for
 

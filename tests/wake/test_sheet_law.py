@@ -83,10 +83,12 @@ def test_option_is_validated_and_resolved():
         WakeModel([aerosonde(), aerosonde()], sheet="yes")
     with pytest.raises(ValueError, match="sheet"):
         WakeConfig(sheet=1)
-    sc = get_scenario("close_formation")
-    with pytest.raises(ValueError, match="wake_sheet"):
-        dataclasses.replace(sc, wake_sheet=0.5)
+    sc = get_scenario("formation_keeping")
+    with pytest.raises(ValueError, match="wake_fidelity"):
+        dataclasses.replace(sc, wake_fidelity="fine")
     assert resolve_sheet(WakeConfig()) is False
-    assert resolve_sheet(WakeConfig(), dataclasses.replace(sc, wake_sheet=True)) is True
-    assert resolve_sheet(WakeConfig(sheet=False), dataclasses.replace(sc, wake_sheet=True)) is False
+    assert resolve_sheet(WakeConfig(), sc) is False
+    assert resolve_sheet(WakeConfig(), dataclasses.replace(sc, wake_fidelity="sheet")) is True
+    assert resolve_sheet(WakeConfig(), get_scenario("close_formation")) is True  # converged: the sheet law under it
+    assert resolve_sheet(WakeConfig(sheet=False), dataclasses.replace(sc, wake_fidelity="sheet")) is False
     assert wake_model_for(WakeConfig(sheet=True), 2).sheet and not wake_model_for(WakeConfig(), 2).sheet

@@ -28,14 +28,16 @@ DEFAULT_TURBULENCE_SIGMA_MPS = 1.0  # the test set's Dryden level (scenarios wit
 
 def eval_env_config(scenario: str, action_mode: str, *, turbulence_sigma_mps: float | None = None, wake: bool = True,
                     control_hz: float = 10.0, compute_benefit: bool = False, duration_s: float | None = None,
-                    turbulence_field: str | None = None):
+                    turbulence_field: str | None = None, wake_fidelity: str | None = None):
     """The evaluation episodes' EnvConfig: the thesis scenario with wake and turbulence on (``turbulence_field``
     None: the env's default field, one frozen von Karman field per formation). With
     its defaults (sigma 1 m/s, wake on, the scenario's duration, no other randomisation than the task's
     ``test_randomisation``: close_formation jitters the follower's start by 0.3 m; the benefit computed for a
     task with a reference optimum, whose harvest ratio needs it) it is the test set's distribution, which the training's validation (model selection) also uses. A scenario with a
     task preset (:mod:`formation_env.tasks`: ``wake_surfing``) keeps its preset's randomisation and
-    reward, with the benefit on, at ``turbulence_sigma_mps`` (None: the preset's level)."""
+    reward, with the benefit on, at ``turbulence_sigma_mps`` (None: the preset's level). ``wake_fidelity`` None: the
+    scenario's (formation_env.sim.formation.WAKE_FIDELITIES; a record flown before a task changed fidelity is re-flown
+    with the fidelity it records)."""
     from formation_env.envs.config import EnvConfig, Randomisation
     from formation_env.tasks import task_for_scenario, task_learning, task_options
 
@@ -50,7 +52,7 @@ def eval_env_config(scenario: str, action_mode: str, *, turbulence_sigma_mps: fl
         task["compute_benefit"] = True
         return EnvConfig(scenario=scenario, learning=task_learning(scenario), action_mode=action_mode, wake=wake,
                          control_hz=control_hz, duration_s=duration_s, turbulence_field=turbulence_field,
-                         randomisation=rnd, **task)
+                         wake_fidelity=wake_fidelity, randomisation=rnd, **task)
     if turbulence_sigma_mps is None:
         turbulence_sigma_mps = DEFAULT_TURBULENCE_SIGMA_MPS
     t = task_for_scenario(scenario)
@@ -59,7 +61,7 @@ def eval_env_config(scenario: str, action_mode: str, *, turbulence_sigma_mps: fl
     compute_benefit = compute_benefit or (t is not None and t.reference is not None)
     return EnvConfig(scenario=scenario, learning=task_learning(scenario), action_mode=action_mode, wake=wake, control_hz=control_hz,
                      compute_benefit=compute_benefit, duration_s=duration_s, turbulence_field=turbulence_field,
-                     randomisation=Randomisation(turbulence_sigma_mps=turbulence_sigma_mps, **extra))
+                     wake_fidelity=wake_fidelity, randomisation=Randomisation(turbulence_sigma_mps=turbulence_sigma_mps, **extra))
 
 
 def reference_saving(scenario_name: str) -> float | None:

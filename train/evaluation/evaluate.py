@@ -96,7 +96,7 @@ def evaluate(policies: Sequence[str], *, scenario: str, episodes: int = TEST_EPI
              action_mode: str | None = None, out_dir: str | Path | None = None, overwrite: bool = False,
              plots: bool = True, duration_s: float | None = None, groups: dict[str, Sequence[str]] | None = None,
              turbulence_field: str | None = None, ablations: Sequence[str | Sequence[str]] = (),
-             n_boot: int = N_BOOT, log: Callable[[str], None] | None = None) -> dict:
+             wake_fidelity: str | None = None, n_boot: int = N_BOOT, log: Callable[[str], None] | None = None) -> dict:
     """Evaluate ``policies`` ("pid", "pid_formation", SB3 zips or RLlib checkpoints) on the same held-out
     episodes (``episodes`` seeds from ``TEST_SEED_BASE``, or from ``seeds[0]``, or exactly ``seeds`` when
     it holds several: then ``episodes`` is not used); optionally write ``results.json``, ``results.md``
@@ -110,7 +110,7 @@ def evaluate(policies: Sequence[str], *, scenario: str, episodes: int = TEST_EPI
     :func:`group_report`), ``statistics`` (how the intervals were computed) and the markdown tables."""
     from formation_env.envs.config import EnvConfig
     from formation_env.scenarios import get_scenario, scenario_names
-    from formation_env.sim.formation import WakeConfig, resolve_coupling
+    from formation_env.sim.formation import WakeConfig, resolve_coupling, resolve_fidelity
 
     if scenario not in scenario_names():
         raise ValueError(f"unknown scenario {scenario!r}; available: {scenario_names()}")
@@ -180,7 +180,7 @@ def evaluate(policies: Sequence[str], *, scenario: str, episodes: int = TEST_EPI
     results = {}
     for pol in loaded:
         cfg = eval_env_config(scenario, pol.action_mode, turbulence_sigma_mps=turbulence_sigma_mps, wake=wake,
-                              turbulence_field=turbulence_field,
+                              turbulence_field=turbulence_field, wake_fidelity=wake_fidelity,
                               control_hz=pol.control_hz, compute_benefit=compute_benefit, duration_s=duration_s)
         t0 = time.perf_counter()
         eps = run_episodes(pol, cfg, seeds, keep_series=True)
@@ -205,6 +205,7 @@ def evaluate(policies: Sequence[str], *, scenario: str, episodes: int = TEST_EPI
     report = {"scenario": scenario, "seeds": seeds, "wake": wake, "turbulence_sigma_mps": turbulence_sigma_mps,
               "turbulence_field": EnvConfig.turbulence_field if turbulence_field is None else turbulence_field,
               "wake_coupling": resolve_coupling(WakeConfig(), scenario=get_scenario(scenario)),
+              "wake_fidelity": wake_fidelity or resolve_fidelity(scenario=get_scenario(scenario)),
               "policies": {n: {k: v for k, v in r.items()} for n, r in results.items()},
               "baselines": baselines, "comparisons": comps, "groups": group_reports,
               "statistics": {"confidence": 0.95, "n_boot": n_boot, "bootstrap_seed": 0,
@@ -230,7 +231,7 @@ def evaluate(policies: Sequence[str], *, scenario: str, episodes: int = TEST_EPI
                 e["series"].pop("t")
         atomic_write_json(out / "results.json", slim, overwrite=overwrite)
         head = (f"# Evaluation: {scenario}\n\n{len(seeds)} held-out episodes (seeds {seeds[0]}..{seeds[-1]}), "
-                f"wake {'on' if wake else 'off'} ({report['wake_coupling']} coupling), turbulence {report['turbulence_field']} "
+                f"wake {'on' if wake else 'off'} ({report['wake_coupling']} coupling, {report['wake_fidelity']} fidelity), turbulence {report['turbulence_field']} "
                 f"sigma {turbulence_sigma_mps:g} m/s. Intervals: 95 %, "
                 f"percentile bootstrap over episodes (scipy.stats.bootstrap, {n_boot} resamples, seed 0) for errors, "
                 f"Wilson for rates; rliable aggregates over training seeds x episodes.\n\n")

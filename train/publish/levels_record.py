@@ -43,7 +43,8 @@ def levels_record(results_dir: str | Path, *, command: str | None = None) -> dic
         rep = json.loads(path.read_text())
         out["by_level"][name] = {
             "turbulence_sigma_mps": rep["turbulence_sigma_mps"], "turbulence_field": rep.get("turbulence_field"),
-            "wake_coupling": rep.get("wake_coupling"), "seeds": [rep["seeds"][0], rep["seeds"][-1]],
+            "wake_coupling": rep.get("wake_coupling"),
+            "wake_fidelity": rep.get("wake_fidelity", "lattice"), "seeds": [rep["seeds"][0], rep["seeds"][-1]],
             "n_episodes": len(rep["seeds"]),
             "summaries": {p: {k: v for k, v in x["summary"].items() if k != "wall_s"} for p, x in rep["policies"].items()},
             "comparisons": rep.get("comparisons", {}),

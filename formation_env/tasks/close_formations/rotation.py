@@ -2,7 +2,7 @@
 geese rotate the lead (issue 25).
 
 The formation starts and ends as ``vee5``'s joint induced-drag optimum (:mod:`.optimum`): apex vehicle 0,
-rank 1 at s1 = (-2, +-0.89, 0.1) b, rank 2 at s2 = (-4, +-1.82, 0.2) b (x forward, y starboard, z down, from the
+rank 1 at s1 = (-2, +-0.89, 0) b, rank 2 at s2 = (-4, +-1.79, 0) b (x forward, y starboard, z down, from the
 UAV at the apex). After the rotation the starboard rank-1 follower (vehicle 1) is the apex, vehicle 3 its
 starboard rank 1, vehicle 0 its starboard rank 2 (the tired leader at the end of a side), vehicles 2 and 4 keep
 their port slots. Slots are relative to vehicle 0, which flies its own straight track (as an agent, below), so in its frame
@@ -15,7 +15,7 @@ pass is abeam at least two lateral steps (~1.8 b, 5 m against the 1.45 m collisi
 2. the port side steps out to port by the rank-2 lateral offset (it makes room for the starboard side), the
    starboard side out to starboard by one rank-1 lateral step (its passing margin);
 3. every follower moves forward by -2 s2_x (6 b for rank 1 starboard, 4 b for the others) on its own line,
-   and to its final height (the new vee's: each rank 0.1 b above the one behind it, vehicle 0 lowest);
+   and to its final height (the new vee's; at the converged optimum every rank flies its wake plane, one height);
 4. the starboard side, now ahead of vehicle 0, shifts to port onto its final slots (vehicle 3 crosses
    vehicle 0's line two spans ahead of it, vehicle 1 four);
 5. hold (the success window: every follower within 1 span of its final slot for the last 5 s, no collision).
@@ -77,7 +77,7 @@ def _scenario() -> Scenario:
                     "starboard side across ahead of vehicle 0), then holds the new vee",
                     duration_s=PHASES_S[-1], slots=tuple(SlotSchedule(kf) for kf in keyframes),
                     notes={"phases_s": list(PHASES_S), "start_and_end": "vee5's joint optimum, apex vehicle 0 -> 1"},
-                    wake_coupling="load_weighted", neighbour_count=2)
+                    wake_coupling="load_weighted", wake_fidelity="converged", neighbour_count=2)
 
 
 SCENARIO = _scenario()

@@ -57,7 +57,8 @@ import numpy as np
 
 from ...io import atomic_write_json
 from ...scenarios.definitions import AEROSONDE_SPAN_M, get_scenario
-from ..close_formation.optimum import DEFAULT_Z_EXCLUSION_B, NOMINAL_FUEL_KG, slot_savings
+from ..close_formation.optimum import LATTICE_WAKE, NOMINAL_FUEL_KG, slot_savings
+from ..close_formation.optimum import LATTICE_Z_EXCLUSION_B as DEFAULT_Z_EXCLUSION_B
 
 __all__ = ["SAFE_BOX_B", "X_B", "CRAB_MAX_DEG", "CACHE_PATH", "crab_angle_rad", "rotate_track_to_heading",
            "saving_in_crosswind", "optimum_in_box", "build_cache", "write_cache", "load_cache",
@@ -121,6 +122,7 @@ def saving_in_crosswind(offsets_b, crab_rad, **model_kw) -> np.ndarray:
     c = np.asarray(crab_rad, float)
     if o.ndim < 1 or o.shape[-1] != 3 or not np.all(np.isfinite(o)) or not np.all(np.isfinite(c)):
         raise ValueError(f"saving_in_crosswind: need finite offsets_b (..., 3) and crab_rad, got shape {o.shape}")
+    model_kw.setdefault("wake", LATTICE_WAKE)  # the task's wake (formation_env.tasks.wake_surfing: the lattice)
     return slot_savings(rotate_track_to_heading(o, c), **model_kw)[..., 1]
 
 
