@@ -36,7 +36,7 @@ def test_converges_on_the_optimum_in_calm_air():
     of the optimum, never leaving the box. (With the energy tasks' load-weighted coupling the lift-matched
     wake is ~1.7x stronger than the thesis's flat-wing one: the seeker first reaches the limit at 121 s, not
     99 s, and holds 0.003 span above it, measured; with the thesis coupling 99 s and 0.0015 span.)"""
-    from formation_env.tasks.close_formation.optimum import slot_savings
+    from formation_env.tasks.close_formation.optimum import LATTICE_WAKE, slot_savings
 
     cfg = make_config(scenario="wake_surfing", learning="followers", randomisation=Randomisation(), duration_s=180.0)
     agent = _agent()
@@ -60,9 +60,9 @@ def test_converges_on_the_optimum_in_calm_air():
     assert saving[:50].mean() < 0.5 * s_opt  # it starts far from the optimum
     assert np.all(centres[1300:, 1] < z_limit + 0.01)  # at the floor limit from 130 s on
     y_line = np.linspace(0.7, 1.3, 61)
-    line = slot_savings(np.stack([np.full(61, -2.0), y_line, np.full(61, z_limit)], -1))[:, 1]
+    line = slot_savings(np.stack([np.full(61, -2.0), y_line, np.full(61, z_limit)], -1), wake=LATTICE_WAKE)[:, 1]
     mean_centre = centres[-600:].mean(axis=0)
-    at_centre = slot_savings(np.array([-2.0, *mean_centre]))[1]
+    at_centre = slot_savings(np.array([-2.0, *mean_centre]), wake=LATTICE_WAKE)[1]  # wake_surfing's wake
     assert at_centre > 0.97 * line.max()
     assert abs(mean_centre[0] - y_opt) < 0.1
     assert not ep["collision"] and ep["box_outside_frac"] == 0.0

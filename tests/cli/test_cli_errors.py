@@ -37,6 +37,7 @@ CASES: list[tuple[list[str], str]] = [
     (["run", "--scenario", "tracking", "--duration", "0.001"], "0.001"),
     (["run", "--scenario", "tracking", "--out", FILE], "afile"),
     (["run", "--scenario", "tracking", "--out", FILE + "/sub"], "afile"),
+    (["evaluate", "--policy", "pid", "--scenario", "close_formation", "--wake-fidelity", "fine"], "'fine'"),
     # replay
     (["replay", "--scenario", "tracking", "--gif", "--max-frames", "0"], "'0'"),
     (["replay", "--scenario", "tracking", "--gif", "--max-frames", "-3"], "'-3'"),

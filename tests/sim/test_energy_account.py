@@ -47,21 +47,25 @@ def test_coupling_resolution():
 
 def test_energy_account_at_the_close_slot():
     """At the reset (both UAVs trimmed, the follower in its slot): the 6-DOF's drag alone is the trim's
-    qS CD; under the load-weighted coupling the 6-DOF applies the ELL's predicted saving (ratio 0.97,
-    measured), under the thesis's effective wind 1.6x it (the ELL's flat wing lifts 60 N of the 103 N)."""
+    qS CD; under the load-weighted coupling the 6-DOF applies the ELL's predicted saving (ratio 1.14 at the converged slot on
+    the wake plane, 0.97 at the lattice's slot 0.1 b below it), under the thesis's effective wind 1.7x it (the ELL's
+    flat wing lifts 60 N of the 103 N)."""
     tr = trim(25.0, 1000.0)
     rho = float(standard_atmosphere(1000.0)[2])
     qs_cd = tr.extras["CD"] * 0.5 * rho * 25.0 ** 2 * AEROSONDE.area
     lw = _sim("close_formation")
-    ew = _sim("close_formation", wake_coupling="effective_wind")
+    # the thesis's coupling with the sheet law (the converged wake's residual table is built for the load-weighted
+    # coupling's lift-matched wing, asking for both is an error, tests/sim/test_wake_fidelity.py; on the wake plane
+    # the lattice reads its legs' ripple): measured 1.72x the ELL's saving
+    ew = _sim("close_formation", wake_coupling="effective_wind", wake_fidelity="sheet")
     assert lw.wake_coupling == "load_weighted" and ew.wake_coupling == "effective_wind"
     a, e = lw.info.energy_account, ew.info.energy_account
     assert a.shape == (2, 2, len(ENERGY_COLUMNS)) and np.all(np.isfinite(a))
     np.testing.assert_allclose(a[:, :, COL["drag_alone_n"]], qs_cd, rtol=2e-4)
     f = a[:, 1]  # the follower
     ratio = f[:, COL["drag_saving_pct_6dof"]] / f[:, COL["drag_saving_pct_ell"]]
-    assert np.all((ratio > 0.9) & (ratio < 1.1)), ratio
-    assert np.all((f[:, COL["drag_saving_pct_ell"]] > 3.0) & (f[:, COL["drag_saving_pct_ell"]] < 6.0))
+    assert np.all((ratio > 0.8) & (ratio < 1.25)), ratio  # the issue's band; measured 1.14 at the converged slot (0.97 on the lattice)
+    assert np.all((f[:, COL["drag_saving_pct_ell"]] > 3.0) & (f[:, COL["drag_saving_pct_ell"]] < 8.0))
     ratio_thesis = e[:, 1, COL["drag_saving_pct_6dof"]] / e[:, 1, COL["drag_saving_pct_ell"]]
     assert np.all(ratio_thesis > 1.4), ratio_thesis
     # the leader 2 spans ahead gains little; the infos' views are the account's columns

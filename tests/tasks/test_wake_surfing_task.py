@@ -171,15 +171,16 @@ def test_box_cost_outweighs_the_artefact_saving_in_the_excluded_band():
     ~0.8 (an artefact; docs/close_formation.md). A policy must never gain by flying there: the box step
     alone must exceed the benefit weight times the largest gain of the *paid* (capped) saving over the band's
     edge."""
-    from formation_env.tasks.close_formation.optimum import load_cache, slot_savings
+    from formation_env.tasks.close_formation.optimum import LATTICE_WAKE, ripple_profile, slot_savings
 
-    ripple = load_cache()["ripple"]  # the lateral profiles' peaks, 0.005 b apart, every 0.01 b of z
-    z = np.asarray(ripple["z_b"])
-    peak = np.asarray(ripple["peak_saving"])[np.abs(z) < 0.1 + 1e-9].max()
-    y_peak = np.asarray(ripple["peak_y_b"])[np.argmax(np.where(np.abs(z) < 0.1 + 1e-9, ripple["peak_saving"], -1))]
-    z_peak = z[np.argmax(np.where(np.abs(z) < 0.1 + 1e-9, ripple["peak_saving"], -1))]
-    assert slot_savings(np.array([-2.0, y_peak, z_peak]))[1] == pytest.approx(peak, abs=2e-3)  # the model's, now
-    edge = slot_savings(np.array([-2.0, 0.9632, 0.1]))[1]
+    # wake_surfing flies the nseg-10 lattice (its scenario's wake_fidelity): the lateral profiles' peaks, 0.005 b
+    # apart, every 0.01 b of z in the band
+    z = np.round(np.arange(-0.1, 0.1 + 1e-9, 0.01), 6)
+    ripple = ripple_profile(z, wake=LATTICE_WAKE)
+    k = int(np.argmax(ripple["peak_saving"]))
+    peak, y_peak, z_peak = float(ripple["peak_saving"][k]), float(ripple["peak_y_b"][k]), float(z[k])
+    assert slot_savings(np.array([-2.0, y_peak, z_peak]), wake=LATTICE_WAKE)[1] == pytest.approx(peak, abs=2e-3)
+    edge = slot_savings(np.array([-2.0, 0.9632, 0.1]), wake=LATTICE_WAKE)[1]
     gain = peak - edge
     assert gain > 0.5  # the artefact is there (so the test is not vacuous)
     w = WAKE_SURFING_REWARD

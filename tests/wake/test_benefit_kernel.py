@@ -130,7 +130,10 @@ def test_close_formation_saving_from_aircraft_state():
 
     flat = slot_savings(np.asarray(data["scenario_slot_b"]), wake=WakeConfig(coupling="effective_wind"))[1]
     assert saving[1] == pytest.approx(flat, abs=2e-5)
-    assert abs(data["scenario_slot_saving"] - flat) < 0.005  # the lift-matched wing moves it by 0.002
+    # the lift-matched wing on the same lattice moves it by little (the cache itself is the converged wake's)
+    from formation_env.tasks.close_formation.optimum import LATTICE_WAKE
+
+    assert abs(slot_savings(np.asarray(data["scenario_slot_b"]), wake=LATTICE_WAKE)[1] - flat) < 0.005
     ref = formation_benefit(model, FormationState(pos, euler, speed, alpha, beta))["induced_drag_saving"][0]
     np.testing.assert_allclose(saving, ref, rtol=0.0, atol=TOL)
 

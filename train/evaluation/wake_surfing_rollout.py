@@ -147,10 +147,12 @@ class OracleKeeper(OracleSetpoint):
     which cannot command a set-point outside the box. Not a controller: it is told the optimum."""
 
     def __init__(self, margin_b: float, name: str | None = None) -> None:
-        from agents.station_keeper import StationKeeper
+        from agents.station_keeper import StationKeeper, StationKeeperGains
 
         super().__init__(margin_b, name or f"oracle_keeper_margin{margin_b:g}")
-        self.keeper = StationKeeper()
+        # the keeper without the lateral integral that close_formation's converged slot on the wake plane needs
+        # (agents/station_keeper.py): wake_surfing still flies the lattice, and its records were flown with these
+        self.keeper = StationKeeper(StationKeeperGains(ki_lateral=0.0))
 
     def reset(self, n_rows: int) -> None:
         super().reset(n_rows)
