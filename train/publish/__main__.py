@@ -2,4 +2,4 @@
 
 from .publish import main
 
-main()
+raise SystemExit(main())

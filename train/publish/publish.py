@@ -12,6 +12,7 @@ from __future__ import annotations
 import argparse
 import json
 import shutil
+import sys
 from pathlib import Path
 
 import yaml
@@ -87,8 +88,10 @@ def attach_evaluation(names: list[str], eval_json: str | Path, record: str | Pat
         atomic_write_json(meta_path, meta, overwrite=True)
 
 
-def main() -> None:
-    ap = argparse.ArgumentParser(prog="python -m train.publish")
+def main() -> int:
+    ap = argparse.ArgumentParser(prog="python -m train.publish",
+                                 description="Copy a run's model into train/policies/NAME.* with its metadata, curve and "
+                                             "validation history (an existing NAME is never overwritten: remove it first)")
     ap.add_argument("run_dir")
     ap.add_argument("name")
     ap.add_argument("--eval", default=None)
@@ -97,12 +100,20 @@ def main() -> None:
     ap.add_argument("--note", default=None)
     ap.add_argument("--model", choices=("best", "final"), default="best")
     a = ap.parse_args()
-    print(publish(a.run_dir, a.name, eval_json=a.eval, wall_s=a.wall_s, stopped_at=a.stopped_at, note=a.note,
-                  model=a.model))
+    try:
+        print(publish(a.run_dir, a.name, eval_json=a.eval, wall_s=a.wall_s, stopped_at=a.stopped_at, note=a.note,
+                      model=a.model))
+    except FileExistsError as e:
+        print(f"error: {a.name} is already published ({e.filename or e}); remove its files first", file=sys.stderr)
+        return 2
+    except (FileNotFoundError, ValueError) as e:
+        print(f"error: {e}", file=sys.stderr)
+        return 2
+    return 0
 
 
 if __name__ == "__main__":
-    main()
+    raise SystemExit(main())
 
 
 def plot_curves(names: list[str], out: str | Path, *, pid_validation: dict | None = None, bin_steps: int = 20_000) -> Path:
