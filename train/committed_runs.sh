@@ -6,7 +6,8 @@
 # frozen Dryden turbulence sigma 1 m/s (wake_surfing: its task preset, train/hyperparams/ppo.yml), wake on, 3 training seeds per task, run two at a time on the
 # 2-core machine (one core each: NUMBA_NUM_THREADS=1, torch on 1 thread), then published with their
 # curves and validation history (echelon3, issue 25: seeds 0 and 1 two at a time, seed 2 beside their held-out
-# evaluation). Usage: bash train/committed_runs.sh [RUNS_DIR]
+# evaluation; issue 23 part 7: close_formation and echelon3 retrained on the converged wake with the same
+# commands, sharing the two cores with evaluations). Usage: bash train/committed_runs.sh [RUNS_DIR]
 set -euo pipefail
 cd "$(dirname "$0")/.."
 RUNS=${1:-runs/committed}
