@@ -139,19 +139,17 @@ def resolve_wake(wake: WakeConfig, config=None, scenario=None) -> WakeConfig:
     if fidelity not in _FIDELITY_FLAGS:
         raise ValueError(f"wake fidelity must be one of {WAKE_FIDELITIES}, got {fidelity!r}")
     sheet, span, table = _FIDELITY_FLAGS[fidelity]
-    resolved = dataclasses.replace(
-        wake, coupling=resolve_coupling(wake, config, scenario),
-        sheet=sheet if wake.sheet is None else wake.sheet,
-        span_correction=span if wake.span_correction is None else wake.span_correction,
-        residual_table=table if wake.residual_table is None else wake.residual_table)
-    if resolved.residual_table and not (resolved.sheet and resolved.span_correction and resolved.nseg == 10
-                                        and not resolved.tailplane and resolved.coupling == "load_weighted"):
-        raise ValueError(f"wake fidelity {fidelity!r}: the residual table needs the sheet law, span correction, "
-                         f"nseg 10, no tailplane and the load_weighted coupling (what it was built for), got "
-                         f"sheet={resolved.sheet}, span_correction={resolved.span_correction}, nseg={resolved.nseg}, "
-                         f"tailplane={resolved.tailplane}, coupling={resolved.coupling!r}; fly wake_fidelity "
-                         f"'sheet' or 'lattice' for another wake")
-    return resolved
+    coupling = resolve_coupling(wake, config, scenario)
+    sheet = sheet if wake.sheet is None else wake.sheet
+    span = span if wake.span_correction is None else wake.span_correction
+    table = table if wake.residual_table is None else wake.residual_table
+    # checked before the WakeConfig is rebuilt, so that the error names the fidelity that asked for the table
+    if table and not (sheet and span and wake.nseg == 10 and not wake.tailplane and coupling == "load_weighted"):
+        raise ValueError(f"wake fidelity {fidelity!r}: the residual table needs sheet=True, span_correction=True, "
+                         f"nseg=10, tailplane=False and the load_weighted coupling (what it was built for), got "
+                         f"sheet={sheet}, span_correction={span}, nseg={wake.nseg}, tailplane={wake.tailplane}, "
+                         f"coupling={coupling!r}; fly wake_fidelity 'sheet' or 'lattice' for another wake")
+    return dataclasses.replace(wake, coupling=coupling, sheet=sheet, span_correction=span, residual_table=table)
 
 
 def resolve_sheet(wake: WakeConfig, scenario=None) -> bool:

@@ -307,11 +307,14 @@ def build_cache(x_b: float = DEFAULT_X_B, *, y_b=None, z_b=None, wake: WakeConfi
     # 1e-3 for the converged wake, whose residual table is within 0.2 % of the nseg-80 peak (1.1e-3): a smaller
     # wiggle is below what the model resolves (measured: a 4e-4 dip between the table's lateral nodes 0.90 and
     # 0.92 b at z = -0.01 and -0.02 b, the fine lattice's own 0.0125 b legs sampled at 0.02 b)
-    tol = 1e-3 if wake == TASK_WAKE else 1e-4
+    from ...sim.formation import resolve_wake
+
+    converged = bool(resolve_wake(wake).residual_table)  # by what the wake is, not by which constant it equals
+    tol = 1e-3 if converged else 1e-4
     z_measured, rp = exclusion_band(x_b, tol=tol, **kw)
     # the task's band is the measured one: none for the converged wake (DEFAULT_Z_EXCLUSION_B); with the nseg-10
     # lattice the ripple measured 0.09 b and the task kept 0.1 b (LATTICE_Z_EXCLUSION_B; issue 23 part 6)
-    z_ex = max(z_measured, DEFAULT_Z_EXCLUSION_B if wake == TASK_WAKE else LATTICE_Z_EXCLUSION_B)
+    z_ex = max(z_measured, DEFAULT_Z_EXCLUSION_B if converged else LATTICE_Z_EXCLUSION_B)
     search = dict(y_range_b=[0.5, 1.5], z_max_b=0.5, grid_step_b=0.05)
     opt = find_optimum(x_b, z_exclusion_b=z_ex, **search, **kw)
     port = find_optimum(x_b, z_exclusion_b=z_ex, side="port", **search, **kw)
