@@ -15,8 +15,10 @@ follower's slot set-point to maximise a measured performance index without a mod
   safe box less the dither amplitude and a margin (so that the dithered set-point, and the aircraft
   tracking it in turbulence, stay in the box), clipped there (anti-windup).
 
-The thesis PID flies the set-point (the env's ``setpoints`` action mode, mapped onto the safe box),
-and the along-track station is held by :class:`agents.pid_formation.PIDFormation`'s speed channel
+The thesis PID flies the set-point (the env's ``setpoints`` action mode, mapped onto the safe box), stiffened by a
+vertical PI inner loop (``inner="pid"``), or :class:`agents.station_keeper.StationKeeper` holds the dithered
+set-point (``inner="station_keeper"``: close formation's precise holding loop, told the set-point as its slot, the
+way the wake-surfing oracle keeper is told the optimum; the inner PI is then off). And the along-track station is held by :class:`agents.pid_formation.PIDFormation`'s speed channel
 (wind feed-forward, PD and integral on the along-track error): the along-track set-point is fixed in
 wake surfing, and the thesis tracker's proportional along-track loop alone lags 8 m per 1 m/s of
 wind. The gains were tuned on training seeds (``train/evaluation/wake_surfing_eval.py --tune-es``;
@@ -33,7 +35,10 @@ import numpy as np
 from agents.common import check_gains
 from agents.pid_formation import PIDFormation
 
-__all__ = ["ExtremumSeekingGains", "ExtremumSeeking"]
+__all__ = ["ExtremumSeekingGains", "ExtremumSeeking", "INNER_LOOPS"]
+
+#: what flies the seeker's set-point: the thesis PID with a vertical PI around it, or the station keeper
+INNER_LOOPS = ("pid", "station_keeper")
 
 
 @dataclass(frozen=True)
@@ -88,7 +93,10 @@ class ExtremumSeeking:
 
     def __init__(self, setpoint_low_m, setpoint_high_m, speed_range_mps: float,
                  gains: ExtremumSeekingGains | None = None, control_hz: float = 10.0, *, box_low_m=None,
-                 box_high_m=None) -> None:
+                 box_high_m=None, inner: str = "pid") -> None:
+        if inner not in INNER_LOOPS:
+            raise ValueError(f"ExtremumSeeking: inner must be one of {INNER_LOOPS}, got {inner!r}")
+        self.inner = inner
         self.gains = ExtremumSeekingGains() if gains is None else gains
         if not isinstance(self.gains, ExtremumSeekingGains):
             raise ValueError(f"ExtremumSeeking: gains must be an ExtremumSeekingGains, got {type(gains).__name__}")
@@ -108,6 +116,11 @@ class ExtremumSeeking:
         self.control_hz = float(control_hz)
         self.along = PIDFormation(control_hz=control_hz, setpoint_low_m=self.low, setpoint_high_m=self.high,
                                   speed_range_mps=speed_range_mps)
+        self.keeper = None
+        if inner == "station_keeper":
+            from agents.station_keeper import StationKeeper
+
+            self.keeper = StationKeeper(control_hz=control_hz)
         self.reset(1)
 
     def reset(self, n_rows: int) -> None:
@@ -121,6 +134,8 @@ class ExtremumSeeking:
         self.gradient = np.zeros((n, 2))
         self.integral = np.zeros((n, 2))
         self.along.reset(n)
+        if self.keeper is not None:
+            self.keeper.reset(n)
 
     def reset_rows(self, rows) -> None:
         rows = np.asarray(rows)
@@ -130,6 +145,8 @@ class ExtremumSeeking:
         self.gradient[rows] = 0.0
         self.integral[rows] = 0.0
         self.along.reset_rows(rows)
+        if self.keeper is not None:
+            self.keeper.reset_rows(rows)
 
     def _dither(self, t_s: np.ndarray) -> np.ndarray:
         g = self.gains
@@ -173,6 +190,8 @@ class ExtremumSeeking:
         self.centre_m = np.clip(self.centre_m + step, np.minimum(lo, 0.0), np.maximum(hi, 0.0))
         self.t_s += dt
         setpoint = self.centre_m + self._dither(self.t_s)
+        if self.keeper is not None:
+            return self._keeper_act(obs, setpoint)
         # inner loops: displace the demand against the error from the set-point (PI, conditional
         # integration: the integral stops while its output is saturated)
         err = self._slot_error_m(obs)[:, 1:3] - setpoint
@@ -187,6 +206,26 @@ class ExtremumSeeking:
         act[:, 2] = self.along.setpoint_action(demand[:, 1], 2)
         free = (demand > self.box_low[1:]) & (demand < self.box_high[1:]) & (np.abs(act[:, 1:3]) < 1.0)
         self.integral += np.where(free | (np.sign(act[:, 1:3]) * err > 0), err * dt, 0.0)
+        act[:, 3] = self.along.act(obs)[:, 3]
+        return np.clip(act, -1.0, 1.0).astype(np.float32)
+
+    def _keeper_act(self, obs: np.ndarray, setpoint: np.ndarray) -> np.ndarray:
+        """The station keeper holding ``setpoint`` (N, 2) (lateral, vertical offsets from the slot, m): it sees its
+        observation with the slot error taken to the set-point, and its own set-point offsets are shifted back by
+        it; the speed channel stays ``pid_formation``'s (the box's +-4 m/s range; the keeper's own is 2)."""
+        from agents.pid_formation import inverse_slog
+        from formation_env.envs.actions import SETPOINT_POSITION_SCALE_M
+        from formation_env.envs.observations import POSITION_SCALE_M, slog, to_dict
+
+        shifted = obs.copy()
+        err = to_dict(shifted, 2)["slot_position_error"]  # a view into ``shifted``
+        e = inverse_slog(err, POSITION_SCALE_M)
+        e[:, 1:] -= setpoint
+        err[:] = slog(e, POSITION_SCALE_M)
+        k = self.keeper.act(shifted)
+        act = np.zeros((obs.shape[0], 4))
+        for axis in (1, 2):
+            act[:, axis] = self.along.setpoint_action(k[:, axis] * SETPOINT_POSITION_SCALE_M + setpoint[:, axis - 1], axis)
         act[:, 3] = self.along.act(obs)[:, 3]
         return np.clip(act, -1.0, 1.0).astype(np.float32)
 

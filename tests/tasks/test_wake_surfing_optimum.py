@@ -9,7 +9,6 @@ import numpy as np
 import pytest
 
 from formation_env.scenarios import get_scenario
-from formation_env.sim.formation import WakeConfig
 from formation_env.tasks.close_formation import optimum as cfm
 from formation_env.tasks.wake_surfing import optimum as ws
 
@@ -47,34 +46,38 @@ def test_crab_angle_sign_and_vectorisation():
 # ---------------------------------------------------------------- optimum in the box
 
 def test_port_and_starboard_optima_mirror(calm):
+    """Mirror images to the tolerance of the converged wake's residual table, whose y -> -y mirror is taken in the
+    source's heading axes and so ignores the trim's sideslip (the wake trails along the air velocity): measured
+    0.0064 b across the track, 3e-4 b vertically and 8e-4 of saving between the sides (the lattice alone: 1e-4)."""
     port = ws.optimum_in_box(0.0, side="port")
     assert port["offset_b"][0] == calm["offset_b"][0] == -2.0
-    assert port["offset_b"][1] == pytest.approx(-calm["offset_b"][1], abs=1e-3)
-    assert port["offset_b"][2] == pytest.approx(calm["offset_b"][2], abs=1e-6)
-    assert port["saving"] == pytest.approx(calm["saving"], abs=1e-4)
+    assert port["offset_b"][1] == pytest.approx(-calm["offset_b"][1], abs=1e-2)
+    assert port["offset_b"][2] == pytest.approx(calm["offset_b"][2], abs=1e-3)
+    assert port["saving"] == pytest.approx(calm["saving"], abs=1.5e-3)
     c = math.radians(8.0)
     stb, prt = ws.optimum_in_box(c), ws.optimum_in_box(-c, side="port")
-    assert prt["offset_b"][1] == pytest.approx(-stb["offset_b"][1], abs=1e-3)
-    assert prt["offset_b"][2] == pytest.approx(stb["offset_b"][2], abs=1e-6)
-    assert prt["saving"] == pytest.approx(stb["saving"], abs=1e-4)
+    assert prt["offset_b"][1] == pytest.approx(-stb["offset_b"][1], abs=1e-2)
+    assert prt["offset_b"][2] == pytest.approx(stb["offset_b"][2], abs=1e-3)
+    assert prt["saving"] == pytest.approx(stb["saving"], abs=1.5e-3)
+    lattice = [ws.optimum_in_box(0.0, side=side, wake=cfm.LATTICE_WAKE, z_exclusion_b=cfm.LATTICE_Z_EXCLUSION_B)
+               for side in ("starboard", "port")]
+    assert lattice[1]["saving"] == pytest.approx(lattice[0]["saving"], abs=1e-4)  # the lattice mirrors exactly
     assert stb["offset_b"][1] > calm["offset_b"][1] + 0.2  # the wake trails downwind: to starboard
     for o in (calm, port, stb, prt):
         assert 0 < o["n_evaluations"] < 1000
 
 
-def test_calm_optimum_is_the_lattice_map_optimum_on_the_box_floor(calm):
-    """wake_surfing still flies the nseg-10 lattice (its box keeps out of that lattice's artefact band): its calm
-    optimum is the lattice's pair optimum on the band's edge, found by the 2-UAV search with the lattice wake; the
-    converged wake's optimum (close_formation's, on the wake plane) lies outside the box."""
-    lat = cfm.find_optimum(z_exclusion_b=cfm.LATTICE_Z_EXCLUSION_B, grid_step_b=0.1, wake=cfm.LATTICE_WAKE)
-    assert calm["offset_b"][1] == pytest.approx(0.963, abs=5e-3)
-    assert calm["offset_b"][1] == pytest.approx(lat.offset_b[1], abs=2e-3)
-    assert calm["offset_b"][2] == pytest.approx(0.1, abs=1e-9)  # on the band's (and the box's) edge
-    assert calm["saving"] == pytest.approx(0.3666, abs=1e-3)  # the lift-matched wing (0.3645 flat)
-    assert calm["saving"] == pytest.approx(lat.saving, abs=1e-4)
-    assert cfm.load_cache()["optimum"]["offset_b"][2] < ws.SAFE_BOX_B[2][0]
+def test_calm_optimum_is_close_formations_converged_optimum_on_the_wake_plane(calm):
+    """wake_surfing flies the converged wake (issue 23 part 7): its calm optimum is close_formation's pair optimum
+    (found by the 2-UAV search over another region), on the leader's wake plane, inside the box."""
+    cf = cfm.load_cache()["optimum"]
+    assert calm["offset_b"][1] == pytest.approx(cf["offset_b"][1], abs=2e-3)
+    assert calm["offset_b"][2] == pytest.approx(cf["offset_b"][2], abs=2e-3)
+    assert abs(calm["offset_b"][2]) < 0.01  # on the wake plane
+    assert calm["saving"] == pytest.approx(cf["saving"], abs=1e-4)
+    assert calm["saving"] == pytest.approx(0.5608, abs=1e-3)
     box = get_scenario("wake_surfing").safe_box_b
-    assert ws.SAFE_BOX_B == box and box[2][0] >= cfm.LATTICE_Z_EXCLUSION_B
+    assert ws.SAFE_BOX_B == box and box[2][0] < calm["offset_b"][2] - 0.3
 
 
 # ---------------------------------------------------------------- the crosswind rotation in the env
@@ -140,8 +143,7 @@ def test_crosswind_optimum_holds_in_the_compiled_env(env_saving, w_e):
     assert sv[4] < sv[0] - 0.1  # not rotating at all (the calm slot) is also much worse
     # the module's rotated calm-air savings are the env's at any offset, not only the optimum (with the env's
     # ELL model: the task flies the load-weighted coupling's lift-matched wing)
-    wake = WakeConfig(coupling=get_scenario("wake_surfing").wake_coupling)
-    np.testing.assert_allclose(ws.saving_in_crosswind(np.array(pts, float), c, wake=wake), sv, atol=1e-5)
+    np.testing.assert_allclose(ws.saving_in_crosswind(np.array(pts, float), c), sv, atol=1e-5)
 
 
 # ---------------------------------------------------------------- the cache
@@ -160,15 +162,15 @@ def test_cache_matches_fresh_optima_and_the_first_order_shift(cache):
     y = np.asarray(cache["optimum"]["y_b"])
     assert np.all(np.diff(y) > 0)  # the optimum moves monotonically downwind with the crab
     np.testing.assert_allclose(y, cache["first_order_y_b"], atol=5e-3)  # (y_calm + 2 sin c) / cos c
-    np.testing.assert_allclose(cache["optimum"]["z_b"], 0.1, atol=1e-6)
+    np.testing.assert_allclose(cache["optimum"]["z_b"], 0.0, atol=3e-3)  # the wake plane
     # the crab-0 map: shape, peak beside the optimum, a few points re-evaluated
     m = cache["map"]
     f = np.asarray(m["follower_saving"])
-    assert f.shape == (len(m["y_b"]), len(m["z_b"])) == (41, 29)
+    assert f.shape == (len(m["y_b"]), len(m["z_b"])) == (41, 49)
     iy, iz = np.unravel_index(np.argmax(f), f.shape)
-    assert abs(m["y_b"][iy] - y[deg == 0][0]) <= 0.05 and m["z_b"][iz] == pytest.approx(0.1)
+    assert abs(m["y_b"][iy] - y[deg == 0][0]) <= 0.05 and m["z_b"][iz] == pytest.approx(0.0)
     assert f.max() <= cache["optimum"]["saving"][int(np.flatnonzero(deg == 0)[0])] + 1e-5
-    iy, iz = np.array([0, 19, 30, 40]), np.array([0, 4, 12, 28])
+    iy, iz = np.array([0, 19, 30, 40]), np.array([0, 16, 20, 48])
     fresh = ws.saving_in_crosswind(np.stack([np.full(4, -2.0), np.asarray(m["y_b"])[iy], np.asarray(m["z_b"])[iz]], -1),
                                    0.0)
     np.testing.assert_allclose(fresh, f[iy, iz], atol=2e-5)

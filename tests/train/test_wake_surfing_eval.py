@@ -80,7 +80,7 @@ def test_every_controller_flies_and_the_policy_beats_the_pid():
             assert e["duration_s"] == pytest.approx(30.0)
             assert all(math.isfinite(e[k]) for k in ("saving", "saving_measured", "reference_saving", "saving_ratio",
                                                      "box_outside_frac", "min_separation_m"))
-            assert 0.36 < e["reference_saving"] < 0.37  # the crab-rotated optimum's saving
+            assert 0.55 < e["reference_saving"] < 0.57  # the crab-rotated optimum's saving (converged wake)
             assert e["saving"] <= e["saving_measured"] + 1e-12 or e["box_outside_frac"] > 0
         out[surfer.name] = np.mean([e["saving_ratio"] for e in eps])
     assert out["ppo"] > out["pid"] + 0.3
@@ -113,7 +113,7 @@ def test_the_randomised_leader_variant_flies_with_its_own_reference():
     for e in eps:
         assert 9.0 <= e["leader_mass_kg"] <= 13.5 and 21.0 < e["leader_airspeed_mps"] < 28.0
         assert 0.8 < e["reference_factor"] < 1.4 and e["reference_factor"] != 1.0
-        assert 0.364 * e["reference_factor"] < e["reference_saving"] < 0.370 * e["reference_factor"]
+        assert 0.559 * e["reference_factor"] < e["reference_saving"] < 0.562 * e["reference_factor"]
     assert len({round(e["leader_mass_kg"], 9) for e in eps}) == 3
     base = fly(pid_surfer(), [1000], config=dataclasses.replace(eval_env_config("wake_surfing", "setpoints"),
                                                                 duration_s=10.0))[0]

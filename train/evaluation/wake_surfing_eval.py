@@ -242,8 +242,10 @@ def tune_es(grid: dict[str, list[float]], *, seeds=TUNING_SEEDS, log=print) -> l
     keys = list(grid)
     out = []
     for values in itertools.product(*(grid[k] for k in keys)):
-        gains = ExtremumSeekingGains(**dict(zip(keys, values)))
-        eps = fly(es_surfer(gains), seeds)
+        combo = dict(zip(keys, values))
+        inner = combo.pop("inner", None)  # what flies the set-point (agents.extremum_seeking.INNER_LOOPS)
+        gains = ExtremumSeekingGains(**combo)
+        eps = fly(es_surfer(gains, inner=inner), seeds)
         s = summarise_surfer(eps, n_boot=200)
         row = {**dict(zip(keys, values)), "saving_ratio": s["saving_ratio"], "reached_80_frac": s["reached_80_frac"],
                "time_to_80_s_mean_censored": s["time_to_80_s_mean_censored"], "box_outside_over_1s": s["box_outside_over_1s"]}

@@ -73,14 +73,17 @@ def pid_formation_surfer():
     return _BoxedPIDFormation()
 
 
-def es_surfer(gains=None, name: str = "extremum_seeking"):
+def es_surfer(gains=None, name: str = "extremum_seeking", inner: str | None = None):
+    """The extremum seeker (agents/extremum_seeking.py) on the wake-surfing box; ``inner`` what flies its set-point
+    (None: the seeker's default, the baseline's)."""
     from agents.extremum_seeking import ExtremumSeeking
     from formation_env.scenarios import get_scenario
     from formation_env.sim.params import safe_box_offsets
 
     low, high, speed = _ranges()
     box_low, box_high = safe_box_offsets(get_scenario("wake_surfing"))
-    agent = ExtremumSeeking(low, high, speed, gains=gains, box_low_m=box_low, box_high_m=box_high)
+    kw = {} if inner is None else {"inner": inner}
+    agent = ExtremumSeeking(low, high, speed, gains=gains, box_low_m=box_low, box_high_m=box_high, **kw)
     agent.name = name
     return agent
 
@@ -88,7 +91,7 @@ def es_surfer(gains=None, name: str = "extremum_seeking"):
 class OracleSetpoint:
     """Not a controller but a ceiling: the thesis PID flown to the reference optimum itself (computed from
     the episode's true steady wind, the leader's demanded track and speed: knowledge no agent has),
-    ``margin_b`` spans below the box floor's optimum, with ``pid_formation``'s speed channel holding the
+    ``margin_b`` spans below the reference optimum, with ``pid_formation``'s speed channel holding the
     along-track station. What the set-point interface can achieve under the episode's turbulence."""
 
     def __init__(self, margin_b: float, name: str | None = None) -> None:
@@ -141,7 +144,7 @@ def oracle_surfer(margin_b: float, name: str | None = None) -> OracleSetpoint:
 class OracleKeeper(OracleSetpoint):
     """The ceiling with a precise holding loop: ``station_keeper`` (agents/station_keeper.py, tuned for
     close_formation's cross-track precision) flown to the reference optimum of the episode's true steady wind,
-    ``margin_b`` spans below the box floor's optimum, with ``pid_formation``'s speed channel along the track (the
+    ``margin_b`` spans below the reference optimum, with ``pid_formation``'s speed channel along the track (the
     box's +-4 m/s: the keeper's own is 2). The keeper sees its observation with the slot error taken to that
     target (its set-point offsets then shifted back by it), and its offsets pass through the box's set-point map,
     which cannot command a set-point outside the box. Not a controller: it is told the optimum."""
@@ -150,9 +153,9 @@ class OracleKeeper(OracleSetpoint):
         from agents.station_keeper import StationKeeper, StationKeeperGains
 
         super().__init__(margin_b, name or f"oracle_keeper_margin{margin_b:g}")
-        # the keeper without the lateral integral that close_formation's converged slot on the wake plane needs
-        # (agents/station_keeper.py): wake_surfing still flies the lattice, and its records were flown with these
-        self.keeper = StationKeeper(StationKeeperGains(ki_lateral=0.0))
+        # the keeper's own gains: wake_surfing's optimum is on the converged wake's plane, as close_formation's slot,
+        # where the tip vortex's steady sidewash needs the lateral integral (agents/station_keeper.py)
+        self.keeper = StationKeeper(StationKeeperGains())
 
     def reset(self, n_rows: int) -> None:
         super().reset(n_rows)

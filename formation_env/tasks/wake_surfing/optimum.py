@@ -28,10 +28,11 @@ leader at angle c reaches 2 b downstream 2 sin c spans downwind); the x change i
 (x cos c - y sin c) is taken into account exactly.
 
 :func:`optimum_in_box` maximises the follower's saving over (y, z) in the box at fixed x: a coarse grid,
-then a bounded L-BFGS-B (forward-difference gradients, each a batched ELL call). z never goes above
-0.1 b below the leader (the box's and the excluded band's edge: inside |z| < 0.1 b the discrete
-trailing legs make the saving an artefact, ``close_formation_map.exclusion_band``); outside the band
-the saving grows towards the wake plane, so the optimum sits on that edge. :func:`build_cache` tabulates
+then a bounded L-BFGS-B (forward-difference gradients, each a batched ELL call), on the task's converged wake
+(:data:`formation_env.tasks.close_formation.optimum.TASK_WAKE`: smooth and single-peaked, no excluded band; the
+lattice-era search stopped 0.1 b below the wake plane, out of the nseg-10 lattice's artefact band). The optimum
+lies on the leader's wake plane, inside the box (0.561 at y = 0.926 b, z = 0.002 b under crab 0; under
++-13 deg of crab the same saving to 1e-3 at y = 0.49 / 1.36 b). :func:`build_cache` tabulates
 the optimum for crab angles -15..15 deg (1 deg steps; the scenario's crosswinds of up to 5 m/s at
 23-27 m/s give |c| < 13 deg) and a saving map at c = 0; :func:`reference_optimum` interpolates it and
 :func:`episode_reference` follows an episode's wind, demanded track and airspeed.
@@ -57,8 +58,7 @@ import numpy as np
 
 from ...io import atomic_write_json
 from ...scenarios.definitions import AEROSONDE_SPAN_M, get_scenario
-from ..close_formation.optimum import LATTICE_WAKE, NOMINAL_FUEL_KG, slot_savings
-from ..close_formation.optimum import LATTICE_Z_EXCLUSION_B as DEFAULT_Z_EXCLUSION_B
+from ..close_formation.optimum import NOMINAL_FUEL_KG, TASK_WAKE, slot_savings
 
 __all__ = ["SAFE_BOX_B", "X_B", "CRAB_MAX_DEG", "CACHE_PATH", "crab_angle_rad", "rotate_track_to_heading",
            "saving_in_crosswind", "optimum_in_box", "build_cache", "write_cache", "load_cache",
@@ -70,7 +70,7 @@ CRAB_MAX_DEG = 15.0  # the cache's crab grid: -15..15 deg
 CRAB_STEP_DEG = 1.0
 CACHE_PATH = Path(__file__).resolve().parents[2] / "data" / "wake_surfing_optimum.json"
 MAP_Y_B = np.round(np.arange(0.0, 2.0 + 1e-9, 0.05), 6)  # the cached saving map's grid (crab 0)
-MAP_Z_B = np.round(np.arange(0.1, 0.8 + 1e-9, 0.025), 6)
+MAP_Z_B = np.round(np.arange(-0.4, 0.8 + 1e-9, 0.025), 6)
 _SIDES = ("starboard", "port")
 _FD_STEP_B = 1e-6  # finite-difference step of the optimiser's gradient, spans
 
@@ -122,18 +122,19 @@ def saving_in_crosswind(offsets_b, crab_rad, **model_kw) -> np.ndarray:
     c = np.asarray(crab_rad, float)
     if o.ndim < 1 or o.shape[-1] != 3 or not np.all(np.isfinite(o)) or not np.all(np.isfinite(c)):
         raise ValueError(f"saving_in_crosswind: need finite offsets_b (..., 3) and crab_rad, got shape {o.shape}")
-    model_kw.setdefault("wake", LATTICE_WAKE)  # the task's wake (formation_env.tasks.wake_surfing: the lattice)
+    model_kw.setdefault("wake", TASK_WAKE)  # the task's wake (formation_env.tasks.wake_surfing: converged)
     return slot_savings(rotate_track_to_heading(o, c), **model_kw)[..., 1]
 
 
 def optimum_in_box(crab_rad: float, *, box_b=SAFE_BOX_B, x_b: float = X_B, side: str = "starboard",
-                   z_exclusion_b: float = DEFAULT_Z_EXCLUSION_B, grid_step_b: float = 0.1, **model_kw) -> dict:
+                   z_exclusion_b: float | None = None, grid_step_b: float = 0.1, **model_kw) -> dict:
     """The follower slot (x fixed at ``x_b``) with the largest saving under crab angle ``crab_rad``.
 
     box_b: ((x_lo, x_hi), (y_lo, y_hi), (z_lo, z_hi)) spans, track frame (default the scenario's
     safe box); the search covers y in (y_lo, y_hi) (mirrored to (-y_hi, -y_lo) for ``side="port"``)
-    and z in (max(z_lo, z_exclusion_b), z_hi) (z down, positive below the leader; the box must lie
-    below the excluded band). A grid of ``grid_step_b`` picks the start of a bounded L-BFGS-B.
+    and z in (z_lo, z_hi) (z down, positive below the leader), or (max(z_lo, z_exclusion_b), z_hi) with an
+    excluded band (None, the default: none; the lattice's artefact band was |z| < 0.1 b, which a lattice-wake
+    search passes here). A grid of ``grid_step_b`` picks the start of a bounded L-BFGS-B.
     Returns ``{"offset_b": [x, y, z], "saving": s, "n_evaluations": slots evaluated}``.
     """
     from scipy.optimize import minimize
@@ -146,7 +147,8 @@ def optimum_in_box(crab_rad: float, *, box_b=SAFE_BOX_B, x_b: float = X_B, side:
     (xlo, xhi), (ylo, yhi), (zlo, zhi) = ((float(a), float(b)) for a, b in box_b)
     if not xlo <= x_b <= xhi:
         raise ValueError(f"optimum_in_box: x_b = {x_b} outside the box's x range ({xlo}, {xhi})")
-    zlo = max(zlo, float(z_exclusion_b))
+    if z_exclusion_b is not None:
+        zlo = max(zlo, float(z_exclusion_b))
     if not (ylo < yhi and zlo < zhi):
         raise ValueError(f"optimum_in_box: empty search box y ({ylo}, {yhi}), z ({zlo}, {zhi})")
     if side == "port":
@@ -187,7 +189,7 @@ def _r(v, d=5):
 def build_cache(*, airspeed_mps: float = 25.0, altitude_m: float = 1000.0, grid_step_b: float = 0.1) -> dict:
     """The cached table: :func:`optimum_in_box` (starboard, the scenario's box, x = -2 b) for crab
     angles -15..15 deg in 1 deg steps, the first-order estimate (y_calm + 2 sin c) / cos c beside it,
-    and the follower's saving map over the box at crab 0 (y 0..2 b step 0.05, z 0.1..0.8 b step
+    and the follower's saving map over the box at crab 0 (y 0..2 b step 0.05, z -0.4..0.8 b step
     0.025). Numbers rounded to 5 digits."""
     kw = dict(airspeed_mps=airspeed_mps, altitude_m=altitude_m)
     crab_deg = np.round(np.arange(-CRAB_MAX_DEG, CRAB_MAX_DEG + 1e-9, CRAB_STEP_DEG), 6)
@@ -205,7 +207,8 @@ def build_cache(*, airspeed_mps: float = 25.0, altitude_m: float = 1000.0, grid_
                   "in spans b of the follower from the leader, leader's track frame (x along the ground "
                   "track, y starboard, z down). Saving = calm-air saving at the offset rotated into the "
                   "leader's air-velocity frame by c. 'map': the follower's saving over the box at c = 0.",
-        "parameters": {"x_b": X_B, "box_b": [list(b) for b in SAFE_BOX_B], "z_exclusion_b": DEFAULT_Z_EXCLUSION_B,
+        "parameters": {"x_b": X_B, "box_b": [list(b) for b in SAFE_BOX_B], "z_exclusion_b": None,
+                       "wake_fidelity": "converged",
                        "span_m": AEROSONDE_SPAN_M, "airspeed_mps": airspeed_mps, "altitude_m": altitude_m,
                        "grid_step_b": grid_step_b, "side": "starboard",
                        "crab_deg": [-CRAB_MAX_DEG, CRAB_MAX_DEG, CRAB_STEP_DEG]},
@@ -302,7 +305,7 @@ def episode_reference(wind_ned, track_rad, airspeed_mps, *, leader_fuel_kg: floa
 def optimum_saving(cache: dict | None = None) -> float:
     """The follower's induced-drag saving at the optimum of the safe box (x = -2 b) in calm air (crab
     angle 0), from the cached table (the package's cache unless ``cache``): the denominator of a harvest
-    ratio. With today's cache 0.3666 at (-2, 0.9635, 0.1) b (the box's floor)."""
+    ratio. With today's cache (the converged wake) 0.5608 at (-2, 0.926, 0.002) b, on the leader's wake plane."""
     t = load_cache() if cache is None else cache
     grid = [float(d) for d in t["crab_deg"]]
     if 0.0 not in grid:
