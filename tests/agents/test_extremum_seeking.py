@@ -10,7 +10,7 @@ from formation_env.envs.observations import observation_size
 from formation_env.tasks import make_config
 from formation_env.scenarios import get_scenario
 from formation_env.sim.params import setpoint_ranges, setpoint_speed_range
-from formation_env.tasks.wake_surfing.optimum import reference_optimum
+from formation_env.tasks.wake_surfing.optimum import reference_optimum, saving_in_crosswind
 from train.evaluation.wake_surfing_rollout import fly
 
 B = 2.9
@@ -27,19 +27,15 @@ def _agent(**gains):
 
 
 def test_converges_on_the_optimum_in_calm_air():
-    """No wind, no turbulence, no manoeuvre: from the thesis slot (saving ~0.15) the seeker climbs to the
-    best point it may hold. The optimum sits on the box's 0.1 b floor; the seeker's centre may come no
-    closer than the floor plus its dither amplitude and margin (so that it stays in the box), so its
-    target is the constrained optimum on that line: from 130 s on its vertical centre stays within 0.01 span
-    (3 cm, a tenth of the scale on which the saving changes) of the limit, and over the last 60 s of 180 its
-    mean centre has a static saving (ELL map) within 3 % of the best on that line, laterally within 0.1 span
-    of the optimum, never leaving the box. (With the energy tasks' load-weighted coupling the lift-matched
-    wake is ~1.7x stronger than the thesis's flat-wing one: the seeker first reaches the limit at 121 s, not
-    99 s, and holds 0.003 span above it, measured; with the thesis coupling 99 s and 0.0015 span.)"""
-    from formation_env.tasks.close_formation.optimum import LATTICE_WAKE, slot_savings
-
+    """No wind, no turbulence, no manoeuvre: from the thesis slot (saving ~0.11) the seeker climbs to the optimum on
+    the leader's wake plane (the converged wake, issue 23 part 7) and circles it with its dither. Measured (seed 5,
+    180 s, the station keeper flying the set-point): from 100 s on its centre stays within 0.09 b vertically and
+    0.08 b laterally of the optimum; over the last 60 s the mean centre's static saving is 0.95 of the optimum and
+    0.013 b off it across the track, and the flown saving 0.60 of it (the 0.14 b vertical dither's price on the
+    sharp peak: 0.22 of saving lost 0.1 b off the plane)."""
     cfg = make_config(scenario="wake_surfing", learning="followers", randomisation=Randomisation(), duration_s=180.0)
     agent = _agent()
+    assert agent.inner == "station_keeper"
     centres = []
 
     class Watched:  # the seeker, its centre recorded at every decision
@@ -53,18 +49,14 @@ def test_converges_on_the_optimum_in_calm_air():
 
     ep = fly(Watched(), [5], config=cfg, keep_series=True)[0]
     centres = np.asarray(centres)
-    g = agent.gains
-    z_limit = SC.safe_box_b[2][0] + (g.amplitude_z_m + g.margin_m) / B
-    y_opt, _, s_opt = reference_optimum(0.0)
+    y_opt, z_opt, s_opt = reference_optimum(0.0)
     saving = np.asarray(ep["series"]["saving"])
-    assert saving[:50].mean() < 0.5 * s_opt  # it starts far from the optimum
-    assert np.all(centres[1300:, 1] < z_limit + 0.01)  # at the floor limit from 130 s on
-    y_line = np.linspace(0.7, 1.3, 61)
-    line = slot_savings(np.stack([np.full(61, -2.0), y_line, np.full(61, z_limit)], -1), wake=LATTICE_WAKE)[:, 1]
+    assert saving[:50].mean() < 0.3 * s_opt  # it starts far from the optimum
+    assert np.all(np.abs(centres[1000:, 1] - z_opt) < 0.15) and np.all(np.abs(centres[1000:, 0] - y_opt) < 0.15)
     mean_centre = centres[-600:].mean(axis=0)
-    at_centre = slot_savings(np.array([-2.0, *mean_centre]), wake=LATTICE_WAKE)[1]  # wake_surfing's wake
-    assert at_centre > 0.97 * line.max()
-    assert abs(mean_centre[0] - y_opt) < 0.1
+    assert saving_in_crosswind(np.array([-2.0, *mean_centre]), 0.0) > 0.9 * s_opt
+    assert abs(mean_centre[0] - y_opt) < 0.05
+    assert saving[-600:].mean() > 0.5 * s_opt
     assert not ep["collision"] and ep["box_outside_frac"] == 0.0
 
 
@@ -101,6 +93,33 @@ def test_setpoint_never_leaves_the_box():
     assert np.any(np.isclose(centre, low[1:] + np.array([agent.gains.amplitude_y_m, agent.gains.amplitude_z_m])
                              + agent.gains.margin_m)) or np.any(np.isclose(centre, high[1:] - np.array(
                                  [agent.gains.amplitude_y_m, agent.gains.amplitude_z_m]) - agent.gains.margin_m))
+
+
+def test_keeper_inner_loop_holds_the_set_point_the_pid_inner_loop_is_kept():
+    """With ``inner="station_keeper"`` the keeper sees its slot error taken to the seeker's set-point: at the set-point
+    (observation's slot error = the set-point) its lateral and vertical actions are what it commands on the nominal slot
+    with zero error, shifted by the set-point; ``inner="pid"`` is the issue-16 design (its own actions differ)."""
+    from agents.station_keeper import StationKeeper
+    from formation_env.envs.actions import SETPOINT_POSITION_SCALE_M
+    from formation_env.envs.observations import POSITION_SCALE_M, slog, to_dict
+
+    agent, pid = _agent(gain_y=0.0, gain_z=0.0), _agent(gain_y=0.0, gain_z=0.0)
+    pid_agent = ExtremumSeeking(pid.low, pid.high, 4.0, gains=pid.gains, box_low_m=pid.box_low, box_high_m=pid.box_high,
+                                inner="pid")
+    assert pid_agent.inner == "pid" and pid_agent.keeper is None
+    agent.reset(1)
+    agent.centre_m[:] = (0.3, -0.5)
+    setpoint = agent.centre_m + agent._dither(agent.t_s + 0.1)  # what act() will ask for (its clock steps first)
+    obs = np.zeros((1, observation_size(2)), dtype=np.float32)
+    to_dict(obs, 2)["slot_position_error"][:] = slog(np.array([[0.0, *setpoint[0]]]), POSITION_SCALE_M)
+    act = agent.act(obs, np.zeros(1))
+    ref = StationKeeper().act(np.zeros((1, observation_size(2))))
+    for axis in (1, 2):
+        want = agent.along.setpoint_action(np.array([ref[0, axis] * SETPOINT_POSITION_SCALE_M + setpoint[0, axis - 1]]),
+                                           axis)
+        assert act[0, axis] == pytest.approx(float(np.clip(want[0], -1, 1)), abs=1e-5)
+    with pytest.raises(ValueError, match="inner"):
+        ExtremumSeeking(pid.low, pid.high, 4.0, inner="lqr")
 
 
 def test_bad_arguments_raise():

