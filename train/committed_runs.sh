@@ -1,13 +1,11 @@
 #!/usr/bin/env bash
 # The exact commands behind the committed policies in train/policies/ (issues 13, 16, 24 and 25 (vee5 and vee5_mappo: run without
-# NUMBA_NUM_THREADS=1, two at a time); the wake_surfing_random_leader
-# seed 0 ran with --config runs/ws24/variant.yml, whose section equals ppo.yml's wake_surfing_random_leader: the resolved
-# hyperparameters are identical): PPO, setpoints actions,
+# NUMBA_NUM_THREADS=1, two at a time): PPO, setpoints actions,
 # frozen Dryden turbulence sigma 1 m/s (wake_surfing: its task preset, train/hyperparams/ppo.yml), wake on, 3 training seeds per task, run two at a time on the
 # 2-core machine (one core each: NUMBA_NUM_THREADS=1, torch on 1 thread), then published with their
 # curves and validation history (echelon3, issue 25: seeds 0 and 1 two at a time, seed 2 beside their held-out
-# evaluation; issue 23 part 7: close_formation and echelon3 retrained on the converged wake with the same
-# commands, sharing the two cores with evaluations). Usage: bash train/committed_runs.sh [RUNS_DIR]
+# evaluation; issue 23 part 7: close_formation, echelon3, wake_surfing and wake_surfing_random_leader retrained on the
+# converged wake with the same commands, sharing the two cores with evaluations and sweeps). Usage: bash train/committed_runs.sh [RUNS_DIR]
 set -euo pipefail
 cd "$(dirname "$0")/.."
 RUNS=${1:-runs/committed}
