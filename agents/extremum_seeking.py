@@ -216,22 +216,13 @@ class ExtremumSeeking:
         return np.clip(act, -1.0, 1.0).astype(np.float32)
 
     def _keeper_act(self, obs: np.ndarray, setpoint: np.ndarray) -> np.ndarray:
-        """The station keeper holding ``setpoint`` (N, 2) (lateral, vertical offsets from the slot, m): it sees its
-        observation with the slot error taken to the set-point, and its own set-point offsets are shifted back by
-        it; the speed channel stays ``pid_formation``'s (the box's +-4 m/s range; the keeper's own is 2)."""
-        from agents.pid_formation import inverse_slog
-        from formation_env.envs.actions import SETPOINT_POSITION_SCALE_M
-        from formation_env.envs.observations import POSITION_SCALE_M, slog, to_dict
-
-        shifted = obs.copy()
-        err = to_dict(shifted, 2)["slot_position_error"]  # a view into ``shifted``
-        e = inverse_slog(err, POSITION_SCALE_M)
-        e[:, 1:] -= setpoint
-        err[:] = slog(e, POSITION_SCALE_M)
-        k = self.keeper.act(shifted)
+        """The station keeper holding ``setpoint`` (N, 2) (lateral, vertical offsets from the slot, m;
+        :meth:`agents.station_keeper.StationKeeper.hold_offset_m`); the speed channel stays ``pid_formation``'s (the
+        box's +-4 m/s range; the keeper's own is 2)."""
+        demand = self.keeper.hold_offset_m(obs, setpoint)
         act = np.zeros((obs.shape[0], 4))
         for axis in (1, 2):
-            act[:, axis] = self.along.setpoint_action(k[:, axis] * SETPOINT_POSITION_SCALE_M + setpoint[:, axis - 1], axis)
+            act[:, axis] = self.along.setpoint_action(demand[:, axis - 1], axis)
         act[:, 3] = self.along.act(obs)[:, 3]
         return np.clip(act, -1.0, 1.0).astype(np.float32)
 

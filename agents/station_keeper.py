@@ -79,7 +79,7 @@ import numpy as np
 from formation_env.control.gains import AutopilotGains, TrackerGains
 from formation_env.envs.actions import SETPOINT_POSITION_SCALE_M, SETPOINT_SPEED_SCALE_MPS
 from formation_env.envs.observations import (NEIGHBOUR_POSITION_SCALE_M, POSITION_SCALE_M, VELOCITY_SCALE_MPS,
-                                             WIND_SCALE_MPS)
+                                             WIND_SCALE_MPS, slog)
 
 from .common import RowIntegrators, check_gains, observation_groups
 from .pid_formation import inverse_slog
@@ -171,6 +171,22 @@ class StationKeeper(RowIntegrators):
             raise ValueError(f"StationKeeper: the thesis loops must map offsets to attitude with Kp_heading "
                              f"Kp_offtrack > 0 and Kp_altitude < 0, got {self.bank_per_m!r}, {self.pitch_per_m!r}")
         self.integral = np.zeros((0, 3))
+
+    def hold_offset_m(self, obs, offset_m) -> np.ndarray:
+        """(N, 2) lateral and vertical set-point offsets (m, starboard and down of the nominal slot) with which the keeper
+        holds a slot displaced by ``offset_m`` (N, 2) (m, starboard and down) from the nominal one: it sees ``obs``
+        with the slot error taken to the displaced slot, and its own offsets are shifted back by the displacement. How
+        a wake-surfing controller that chooses where to fly (the extremum seeker, the oracle ceiling) lets the keeper
+        hold it; the caller maps the offsets onto its own set-point range (a safe box's)."""
+        shifted, groups = observation_groups(np.array(obs, dtype=float), "StationKeeper")  # groups: views into a copy
+        off = np.asarray(offset_m, dtype=float)
+        if off.shape != (shifted.shape[0], 2):
+            raise ValueError(f"StationKeeper.hold_offset_m: offset_m must have shape ({shifted.shape[0]}, 2), got "
+                             f"{off.shape}")
+        e = inverse_slog(groups["slot_position_error"], POSITION_SCALE_M)
+        e[:, 1:] -= off
+        groups["slot_position_error"][:] = slog(e, POSITION_SCALE_M)
+        return self.act(shifted)[:, 1:3] * SETPOINT_POSITION_SCALE_M + off
 
     def act(self, obs) -> np.ndarray:
         obs, groups = observation_groups(obs, "StationKeeper")

@@ -237,3 +237,20 @@ def test_beats_pid_formation_across_the_track_in_turbulence():
     assert np.mean([e["rms_lateral_m"] for e in sk]) < 0.6
     assert np.mean([e["harvest_ratio"] for e in sk]) > 0.6
     assert np.mean([e["induced_drag_saving"] for e in sk]) > np.mean([e["induced_drag_saving"] for e in pf])
+
+
+def test_hold_offset_m_displaces_the_slot_the_keeper_holds():
+    """With no displacement it is the keeper's own set-point offsets (m); displaced by d it is the keeper's action on
+    the error taken to the displaced slot, shifted back by d (so a follower already there is held there); a wrong
+    shape is refused."""
+    from formation_env.envs.actions import SETPOINT_POSITION_SCALE_M
+
+    err = np.array([0.0, 0.4, -0.2])
+    obs = _obs(err=err)
+    own = StationKeeper().act(obs)[:, 1:3] * SETPOINT_POSITION_SCALE_M
+    np.testing.assert_allclose(StationKeeper().hold_offset_m(obs, np.zeros((1, 2))), own, rtol=1e-12, atol=1e-12)
+    d = np.array([[0.4, -0.2]])  # the follower sits on the displaced slot: the keeper holds it as it holds its own
+    at_slot = StationKeeper().act(_obs(err=np.zeros(3)))[:, 1:3] * SETPOINT_POSITION_SCALE_M
+    np.testing.assert_allclose(StationKeeper().hold_offset_m(obs, d), at_slot + d, atol=1e-9)
+    with pytest.raises(ValueError, match="offset_m"):
+        StationKeeper().hold_offset_m(obs, np.zeros(2))

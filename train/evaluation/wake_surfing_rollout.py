@@ -162,22 +162,11 @@ class OracleKeeper(OracleSetpoint):
         self.keeper.reset(n_rows)
 
     def act(self, obs):
-        from formation_env.envs.actions import SETPOINT_POSITION_SCALE_M
-        from formation_env.envs.observations import POSITION_SCALE_M, slog, to_dict
-
-        from agents.pid_formation import inverse_slog
-
         obs = np.asarray(obs, dtype=float)
-        target = self._target_offset_m(obs.shape[0])  # (N, 2) starboard, down of the nominal slot, m
-        shifted = obs.copy()
-        err = to_dict(shifted, 2)["slot_position_error"]  # a view: the keeper's slot becomes the target
-        e = inverse_slog(err, POSITION_SCALE_M)
-        e[:, 1:] -= target
-        err[:] = slog(e, POSITION_SCALE_M)
-        k = self.keeper.act(shifted)
+        demand = self.keeper.hold_offset_m(obs, self._target_offset_m(obs.shape[0]))  # (N, 2) starboard, down, m
         a = np.zeros((obs.shape[0], 4))
         for axis in (1, 2):
-            a[:, axis] = self.along.setpoint_action(k[:, axis] * SETPOINT_POSITION_SCALE_M + target[:, axis - 1], axis)
+            a[:, axis] = self.along.setpoint_action(demand[:, axis - 1], axis)
         a[:, 3] = self.along.act(obs)[:, 3]
         return np.clip(a, -1.0, 1.0)
 
