@@ -286,7 +286,7 @@ def plot_surfing_figure(path, policy_zip: str, *, es_gains=None, crosswind_mps: 
         yy, zz = np.meshgrid(y, z, indexing="ij")
         grid = np.stack([np.full_like(yy, -2.0), yy, zz], axis=-1)
         sav = saving_in_crosswind(grid, crab)
-        cs = ax.contourf(yy, zz, sav, levels=np.linspace(-0.1, 0.45, 23), cmap="viridis", extend="both")
+        cs = ax.contourf(yy, zz, sav, levels=np.linspace(-0.1, 0.6, 29), cmap="viridis", extend="both")  # the optimum: 0.56
         oy, oz, osav = reference_optimum(crab)
         ax.plot(float(oy), float(oz), marker="*", ms=16, color="white", mec="k", label=f"reference optimum ({float(osav):.3f})")
         ax.plot(1.0, 0.3, marker="s", ms=8, color="tab:red", mec="k", label="nominal slot (thesis PID)")
