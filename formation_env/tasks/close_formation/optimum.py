@@ -47,8 +47,9 @@ from ...sim.formation import WakeConfig
 #: span correction and residual table of pairs, within 0.2 % of an nseg-80 lattice's peak, issue 23): the map is the
 #: saving those tasks report
 TASK_WAKE = WakeConfig(coupling="load_weighted", sheet=True, span_correction=True, residual_table=True)
-#: the thesis's nseg-10 lattice with the lift-matched wing (discrete trailing legs): the wake wake_surfing still
-#: flies (its safe box keeps out of the band LATTICE_Z_EXCLUSION_B where that lattice's saving ripples)
+#: the thesis's nseg-10 lattice with the lift-matched wing (discrete trailing legs): what the energy tasks flew before
+#: issue 23 part 7 (wake_surfing's lattice-era box kept out of the band LATTICE_Z_EXCLUSION_B where its saving ripples);
+#: kept for comparisons and for ``--wake-fidelity lattice``
 LATTICE_WAKE = WakeConfig(coupling="load_weighted", sheet=False, span_correction=False, residual_table=False)
 
 __all__ = ["DEFAULT_X_B", "THESIS_SLOT_B", "DEFAULT_Z_EXCLUSION_B", "LATTICE_Z_EXCLUSION_B", "TASK_WAKE",
