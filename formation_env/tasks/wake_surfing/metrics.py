@@ -102,8 +102,9 @@ def episode_metrics(rec: WakeSurfingRecorder, result: RolloutResult, keep_series
         missing = rec.full_decisions - n if result.terminated[i] else 0
         sv = arr["saving"][:n, i]
         outside = np.concatenate([arr["box"][:n, i] > 0.0, np.ones(missing, bool)])
-        # outside the box a decision earns nothing: there the ELL's saving may be the wake-plane band's
-        # artefact (up to ~0.8), which no controller may claim
+        # outside the box a decision earns nothing: the box is the task's constraint (on the nseg-10 lattice the
+        # saving there could be the wake-plane band's artefact; on the converged wake the port side of the wake lies
+        # beyond the port wall under a strong crab)
         sv_in = np.where(outside, 0.0, np.concatenate([sv, np.zeros(missing)]))
         fuel = dict(leader_fuel_kg=float(rec.fuel[i, 0]), follower_fuel_kg=float(rec.fuel[i, 1])) \
             if rec.random_leader else {}
