@@ -13,8 +13,9 @@ the box along-track in every validation episode (returns flat): the box cost is 
 and the speed set-point that holds the station needs the dense along-track signal. Each episode
 draws a steady crosswind (+-5 m/s across the initial track: the crab angle turns the wake against
 the track), a leader turn
-(+-30 deg at 3 deg/s) and speed change (+-1 m/s) at a random time in its first half, and frozen
-Dryden turbulence at 0.25 m/s (below MIL-F-8785C's "light" at this altitude). Measured with the thesis
+(+-30 deg at 3 deg/s) and speed change (+-1 m/s) at a random time in its first half, and
+turbulence at 0.25 m/s (the env's frozen von Karman field; below MIL-F-8785C's "light" at this altitude).
+Measured with the thesis
 PID at the nominal slot (8 training seeds): at 0.5 m/s its vertical distance to the leader wanders
 with a standard deviation of 0.15-0.35 span (at 0.25 m/s 0.08-0.18). The task flies the converged wake
 (issue 23 part 7): its optimum lies on the leader's wake plane (0.561 at 0.93 span starboard, z = 0.002 span in
