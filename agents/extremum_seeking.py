@@ -219,12 +219,7 @@ class ExtremumSeeking:
         """The station keeper holding ``setpoint`` (N, 2) (lateral, vertical offsets from the slot, m;
         :meth:`agents.station_keeper.StationKeeper.hold_offset_m`); the speed channel stays ``pid_formation``'s (the
         box's +-4 m/s range; the keeper's own is 2)."""
-        demand = self.keeper.hold_offset_m(obs, setpoint)
-        act = np.zeros((obs.shape[0], 4))
-        for axis in (1, 2):
-            act[:, axis] = self.along.setpoint_action(demand[:, axis - 1], axis)
-        act[:, 3] = self.along.act(obs)[:, 3]
-        return np.clip(act, -1.0, 1.0).astype(np.float32)
+        return self.along.hold_actions(self.keeper.hold_offset_m(obs, setpoint), obs).astype(np.float32)
 
     @staticmethod
     def _slot_error_m(obs: np.ndarray) -> np.ndarray:

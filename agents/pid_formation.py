@@ -108,6 +108,18 @@ class PIDFormation(RowIntegrators):
         down = offset_m / lo if lo > 0 else np.zeros_like(offset_m)
         return np.where(offset_m >= 0, up, down)
 
+    def hold_actions(self, offsets_m, obs) -> np.ndarray:
+        """(N, 4) set-point actions in [-1, 1] that command the lateral and vertical ``offsets_m`` (N, 2) (m, starboard
+        and down of the slot; :meth:`setpoint_action`), the along-track offset 0, and this controller's own speed
+        channel on ``obs`` (advancing its integrators): how a controller that chooses where to fly across the track
+        (the extremum seeker, the wake-surfing ceilings) leaves the along-track station to it."""
+        off = np.asarray(offsets_m, dtype=float)
+        act = np.zeros((off.shape[0], 4))
+        for axis in (1, 2):
+            act[:, axis] = self.setpoint_action(off[:, axis - 1], axis)
+        act[:, 3] = self.act(obs)[:, 3]
+        return np.clip(act, -1.0, 1.0)
+
     def act(self, obs) -> np.ndarray:
         obs, groups = observation_groups(obs, "PIDFormation")
         self._rows_for(obs)

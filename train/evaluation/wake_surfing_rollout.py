@@ -129,12 +129,7 @@ class OracleSetpoint:
         return out
 
     def act(self, obs):
-        offset = self._target_offset_m(obs.shape[0])
-        a = np.zeros((obs.shape[0], 4))
-        a[:, 1] = self.along.setpoint_action(offset[:, 0], 1)
-        a[:, 2] = self.along.setpoint_action(offset[:, 1], 2)
-        a[:, 3] = self.along.act(obs)[:, 3]
-        return np.clip(a, -1.0, 1.0)
+        return self.along.hold_actions(self._target_offset_m(obs.shape[0]), obs)
 
 
 def oracle_surfer(margin_b: float, name: str | None = None) -> OracleSetpoint:
@@ -164,11 +159,7 @@ class OracleKeeper(OracleSetpoint):
     def act(self, obs):
         obs = np.asarray(obs, dtype=float)
         demand = self.keeper.hold_offset_m(obs, self._target_offset_m(obs.shape[0]))  # (N, 2) starboard, down, m
-        a = np.zeros((obs.shape[0], 4))
-        for axis in (1, 2):
-            a[:, axis] = self.along.setpoint_action(demand[:, axis - 1], axis)
-        a[:, 3] = self.along.act(obs)[:, 3]
-        return np.clip(a, -1.0, 1.0)
+        return self.along.hold_actions(demand, obs)
 
 
 def oracle_keeper(margin_b: float, name: str | None = None) -> OracleKeeper:

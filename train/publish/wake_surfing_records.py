@@ -80,6 +80,8 @@ def group_levels(episodes_dir, group: str, settings=SETTINGS) -> tuple[dict, dic
     """``(levels, full)``: the group's levels (``<scenario>_sigma_<s>`` -> summaries of every controller, paired
     comparisons, rliable aggregates and per-episode columns: every controller's for the task group, the policies'
     only for another group) and, for the task group, the full report of its task level (None otherwise)."""
+    from formation_env.scenarios import get_scenario
+
     levels, full = {}, None
     for scenario, sigma in settings:
         r, names = _group_report(episodes_dir, scenario, sigma, group)
@@ -89,7 +91,7 @@ def group_levels(episodes_dir, group: str, settings=SETTINGS) -> tuple[dict, dic
             full = r
         keep = list(r["controllers"]) if group == FULL[0] else names
         levels[key] = {
-            "scenario": scenario, "wake_fidelity": "converged", "turbulence_sigma_mps": sigma,
+            "scenario": scenario, "wake_fidelity": get_scenario(scenario).wake_fidelity, "turbulence_sigma_mps": sigma,
             "seeds": [r["seeds"][0], r["seeds"][-1]],
             "summaries": {n: c["summary"] for n, c in r["controllers"].items()},
             "comparisons": r["comparisons"], "seed_spread": r.get("seed_spread"), "aggregates": r.get("aggregates"),
