@@ -78,11 +78,12 @@ import numpy as np
 
 from formation_env.control.gains import AutopilotGains, TrackerGains
 from formation_env.envs.actions import SETPOINT_POSITION_SCALE_M, SETPOINT_SPEED_SCALE_MPS
-from formation_env.envs.observations import (NEIGHBOUR_POSITION_SCALE_M, POSITION_SCALE_M, VELOCITY_SCALE_MPS,
+from formation_env.envs.observations import (POSITION_SCALE_M, VELOCITY_SCALE_MPS,
                                              WIND_SCALE_MPS, slog)
 
 from .common import RowIntegrators, check_gains, observation_groups
 from .pid_formation import inverse_slog
+from .separation_guard import guard_terms, neighbour_positions
 
 __all__ = ["StationKeeperGains", "StationKeeper"]
 
@@ -201,26 +202,10 @@ class StationKeeper(RowIntegrators):
         # separation guard: once the nearest other UAV is less than guard_m ahead along the track (the slot
         # is 2 spans behind), the target moves away from it across the track and down (a target shift, not
         # added loop stiffness), and the speed demand drops k_guard m/s per m inside the guard
-        nb = groups.get("neighbours")
         e_y, e_z = err[:, 1].copy(), err[:, 2].copy()
-        if nb is not None and nb.shape[1] >= 6:
-            rel = inverse_slog(nb.reshape(nb.shape[0], -1, 6)[:, :, :3], NEIGHBOUR_POSITION_SCALE_M)
-            # only a UAV ahead of the slot and in line with it across the track can be overtaken into (in a vee
-            # not the follower abeam on the other side, 1.8 spans = 5.2 m from the slot, nor the one behind);
-            # judged about the slot, not the aircraft, so the guard's own shift never releases it (with one
-            # leader 2 spans ahead of the slot, as in close_formation, the leader is always the one guarded)
-            to_slot = rel + err[:, None, :]  # the neighbour from the slot, slot frame
-            in_line = (to_slot[:, :, 0] > 0.0) & (np.abs(to_slot[:, :, 1]) < g.guard_window_m)
-            dist = np.where(in_line, np.linalg.norm(rel, axis=2), np.inf)
-            j = np.argmin(dist, axis=1)
-            near = rel[np.arange(len(j)), j]
-            depth = np.where(np.isfinite(dist[np.arange(len(j)), j]), np.clip(g.guard_m - near[:, 0], 0.0, 2.0 * g.guard_m),
-                             0.0)
-            ramp = np.minimum(depth / g.guard_m, 1.0) ** 2
-            e_y = e_y - g.guard_lateral_m * ramp * np.where(near[:, 1] > 0, -1.0, 1.0)
-            e_z = e_z - g.guard_vertical_m * ramp
-        else:
-            depth = np.zeros(len(e_y))
+        side, depth, ramp = guard_terms(err, neighbour_positions(groups), g.guard_m, g.guard_window_m)
+        e_y = e_y - g.guard_lateral_m * ramp * side
+        e_z = e_z - g.guard_vertical_m * ramp
         phi, p_rate = groups["attitude"][:, 0] * 0.5, groups["rates"][:, 0]
         # cross track: slot error -> lateral velocity demand -> designed bank -> bank demand sent (roll lead)
         v_des = np.clip(-g.kp_lateral * e_y, -g.v_lateral_max, g.v_lateral_max)

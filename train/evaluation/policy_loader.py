@@ -54,8 +54,10 @@ def policy_metadata(path: Path) -> dict:
             import yaml
 
             data = yaml.safe_load(cfg.read_text()) or {}
+            data = data.get("config", data)  # a run's config.yaml: {"command", "config": TrainConfig fields}
             return {"algo": data.get("algo"), "action_mode": data.get("action_mode"), "scenario": data.get("scenario"),
-                    "control_hz": (data.get("env_kwargs") or {}).get("control_hz", 10.0)}
+                    "control_hz": (data.get("env_kwargs") or {}).get("control_hz", 10.0),
+                    "action_guard": bool(data.get("action_guard", False))}
     return {}
 
 
@@ -109,4 +111,11 @@ def load_policy(spec: str, *, action_mode: str | None = None, name: str | None =
     def act(obs: np.ndarray) -> np.ndarray:
         return model.predict(obs, deterministic=True)[0]
 
+    if meta.get("action_guard"):  # trained with the separation guard in the loop: it is part of the policy
+        if mode != "setpoints":
+            raise ValueError(f"policy {spec!r}: its metadata asks for the separation guard, which filters set-point "
+                             f"actions, but it is flown with {mode!r} actions")
+        from ..sb3.guard import guarded
+
+        act = guarded(act)
     return EvalPolicy(name or path.stem, mode, act, float(meta.get("control_hz", 10.0) or 10.0), str(path))

@@ -35,7 +35,8 @@ def publish(run_dir: str | Path, name: str, *, eval_json: str | Path | None = No
         best["validation"] = json.loads((run / "evaluations.json").read_text())[-1]
     c = cfg["config"]
     meta = {
-        "env": {k: best[k] for k in ("algo", "scenario", "action_mode", "control_hz")},
+        "env": {**{k: best[k] for k in ("algo", "scenario", "action_mode", "control_hz")},
+                **({"action_guard": True} if best.get("action_guard") else {})},
         "command": cfg.get("command"),
         "seed": c["seed"],
         "num_timesteps": best["num_timesteps"],

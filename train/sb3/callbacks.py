@@ -84,8 +84,12 @@ def build_callbacks(cfg: TrainConfig, run_dir: Path, state: dict, log: Callable[
 
         def evaluate(self) -> None:
             model = self.model
-            summ = summarise(run_episodes(FunctionPolicy(lambda o: model.predict(o, deterministic=True)[0]), self.config,
-                                          self.seeds))
+            act = lambda o: model.predict(o, deterministic=True)[0]  # noqa: E731
+            if cfg.action_guard:
+                from .guard import guarded
+
+                act = guarded(act)
+            summ = summarise(run_episodes(FunctionPolicy(act), self.config, self.seeds))
             score = selection_score(summ)
             entry = {"num_timesteps": int(self.num_timesteps), "score": score, **summ}
             state["evaluations"].append(entry)

@@ -41,7 +41,7 @@ __all__ = ["ALGOS", "TrainConfig", "load_hyperparams", "make_env_config"]
 ALGOS = ("ppo", "sac", "td3")
 
 _TRAIN_KEYS = {"n_timesteps", "n_formations", "policy", "policy_kwargs", "env_kwargs", "eval_freq",
-               "eval_episodes", "checkpoint_freq", "torch_threads", "reward_scale", "init_policy"}
+               "eval_episodes", "checkpoint_freq", "torch_threads", "reward_scale", "init_policy", "action_guard"}
 _ALGO_KEYS = {
     "ppo": {"learning_rate", "n_steps", "batch_size", "n_epochs", "gamma", "gae_lambda", "clip_range",
             "clip_range_vf", "normalize_advantage", "ent_coef", "vf_coef", "max_grad_norm", "use_sde",
@@ -226,6 +226,9 @@ class TrainConfig:
     # an SB3 zip of the same algorithm and policy whose parameters start the run (fine-tuning, e.g. vee_rotation
     # from a vee5 policy); None: a fresh initialisation
     init_policy: str | None = None
+    # the separation guard (agents.separation_guard) filters the policy's set-point actions in training, in
+    # validation and wherever the published policy is evaluated (its sidecar says so): part of the policy
+    action_guard: bool = False
 
     def __post_init__(self) -> None:
         from formation_env.scenarios import scenario_names
@@ -266,6 +269,17 @@ class TrainConfig:
         if isinstance(self.reward_scale, bool) or not isinstance(self.reward_scale, (int, float)) \
                 or not math.isfinite(self.reward_scale) or not 0 < self.reward_scale <= 1e3:
             raise ValueError(f"reward_scale must be a finite number > 0 (and <= 1000), got {self.reward_scale!r}")
+        if not isinstance(self.action_guard, bool):
+            raise ValueError(f"action_guard must be true or false, got {self.action_guard!r}")
+        if self.action_guard and self.action_mode != "setpoints":
+            raise ValueError(f"action_guard filters set-point actions; action mode {self.action_mode!r} has none "
+                             "(use --action-mode setpoints or action_guard: false)")
+        if self.action_guard:
+            from formation_env.scenarios import get_scenario
+
+            if get_scenario(self.scenario).safe_box_b is not None:
+                raise ValueError(f"action_guard: scenario {self.scenario!r} has a safe box, whose set-point ranges are not "
+                                 "the guard's +-5 m (use action_guard: false)")
         if not 1 <= self.torch_threads <= 1024:
             raise ValueError(f"torch_threads must be in [1, 1024], got {self.torch_threads}")
         if not isinstance(self.policy, str) or self.policy not in POLICIES:

@@ -53,6 +53,8 @@ def run_metadata(cfg: TrainConfig, steps: int, extra: dict | None = None) -> dic
     env = make_env_config(cfg)
     d = {"algo": cfg.algo, "scenario": cfg.scenario, "action_mode": cfg.action_mode, "control_hz": env.control_hz,
          "seed": cfg.seed, "num_timesteps": int(steps)}
+    if cfg.action_guard:
+        d["action_guard"] = True
     if extra:
         d.update(extra)
     return d

@@ -107,6 +107,10 @@ def make_train_env(cfg: TrainConfig, seed: int):
     from formation_env.envs import FormationVecEnv
 
     env = FormationVecEnv(cfg.n_formations, make_env_config(cfg), seed=seed)
+    if cfg.action_guard:  # the separation guard filters the policy's set-points (inside MAPPO's global state)
+        from .guard import GuardedVecEnv
+
+        env = GuardedVecEnv(env)
     if cfg.policy == "CentralCriticPolicy":  # MAPPO: every row gets its formation's agent-specific global state
         from .central_critic import GlobalStateVecEnv
 

@@ -1,0 +1,46 @@
+"""The separation guard in the training loop: :class:`GuardedVecEnv` passes every action through
+:class:`agents.separation_guard.SeparationGuard` with the observation the policy acted on, so the policy learns
+with the guard in the loop (SB3 stores the policy's own actions in its rollout buffer; the guard is part of the
+environment from the policy's point of view, and part of the policy when it is evaluated)."""
+
+from __future__ import annotations
+
+import numpy as np
+from stable_baselines3.common.vec_env import VecEnvWrapper
+
+__all__ = ["GuardedVecEnv", "guarded"]
+
+
+def guarded(act):
+    """``act(obs) -> actions`` followed by the separation guard (the evaluation's and the validation's policy)."""
+    from agents.separation_guard import SeparationGuard
+
+    guard = SeparationGuard()
+    return lambda obs: guard.filter(obs, act(obs))
+
+
+class GuardedVecEnv(VecEnvWrapper):
+    """``venv`` (a :class:`~formation_env.envs.FormationVecEnv` of set-point actions, or a wrapper of one that keeps
+    its observations) whose actions pass through the separation guard, judged on the last observations (after an
+    episode's end the next episode's first: the VecEnv resets automatically)."""
+
+    def __init__(self, venv) -> None:
+        from agents.separation_guard import SeparationGuard
+
+        super().__init__(venv)
+        self.guard = SeparationGuard()
+        self._obs: np.ndarray | None = None
+
+    def reset(self):
+        self._obs = self.venv.reset()
+        return self._obs
+
+    def step_async(self, actions) -> None:
+        if self._obs is None:
+            raise RuntimeError("GuardedVecEnv: step before reset")
+        self.venv.step_async(self.guard.filter(self._obs, np.asarray(actions)))
+
+    def step_wait(self):
+        obs, rew, done, infos = self.venv.step_wait()
+        self._obs = obs
+        return obs, rew, done, infos
