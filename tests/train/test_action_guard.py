@@ -2,11 +2,12 @@
 say so, and load_policy flies the loaded model through the same filter (and an unguarded run's policy without)."""
 
 import json
+import shutil
 
 import numpy as np
 
 from agents.separation_guard import SeparationGuard
-from train.evaluation.policy_loader import load_policy
+from train.evaluation.policy_loader import load_policy, policy_metadata
 from train.sb3.train import train
 from formation_env.envs.observations import group_sizes, observation_size, slog
 
@@ -39,3 +40,9 @@ def test_guarded_run_and_its_loaded_policy(tmp_path, tiny):
         want = SeparationGuard().filter(_overtaking(), raw) if guard else raw
         np.testing.assert_array_equal(pol.act(_overtaking()), want)
         assert guard == (not np.array_equal(want, raw))
+        # without a sidecar the run's config.yaml speaks (its TrainConfig sits under "config")
+        bare = out / "checkpoints" / "bare.zip"
+        bare.parent.mkdir(exist_ok=True)
+        shutil.copy(out / "best_model.zip", bare)
+        meta = policy_metadata(bare)
+        assert meta["algo"] == "ppo" and meta["action_mode"] == "setpoints" and meta["action_guard"] is guard
