@@ -34,7 +34,7 @@ from formation_env.envs.observations import NEIGHBOUR_POSITION_SCALE_M, POSITION
 from .common import check_gains, observation_groups
 from .pid_formation import inverse_slog
 
-__all__ = ["GuardGains", "SeparationGuard", "guard_terms"]
+__all__ = ["GuardGains", "SeparationGuard", "guard_terms", "speed_excess_offset_m"]
 
 
 def guard_terms(err: np.ndarray, rel: np.ndarray | None, guard_m: float, window_m: float):
@@ -60,6 +60,13 @@ def guard_terms(err: np.ndarray, rel: np.ndarray | None, guard_m: float, window_
     return side, depth, ramp
 
 
+def speed_excess_offset_m(dv_mps: np.ndarray, kp_alongtrack: float) -> np.ndarray:
+    """Along-track set-point offset (m) carrying the part of a speed demand ``dv_mps`` beyond the +-2 m/s speed
+    channel: the tracker demands V = |V_d| - Kp_alongtrack ATD, so an offset dx ahead adds Kp_alongtrack dx."""
+    over = dv_mps - np.clip(dv_mps, -SETPOINT_SPEED_SCALE_MPS, SETPOINT_SPEED_SCALE_MPS)
+    return over / kp_alongtrack
+
+
 def neighbour_positions(groups: dict) -> np.ndarray | None:
     """(N, K, 3) neighbours minus the follower (m, slot frame) from the observation groups, None without any."""
     nb = groups.get("neighbours")
@@ -70,8 +77,8 @@ def neighbour_positions(groups: dict) -> np.ndarray | None:
 
 @dataclass(frozen=True)
 class GuardGains:
-    """The guard's zone and response (the station keeper's values, :class:`agents.station_keeper.StationKeeperGains`
-    ``guard_*`` and ``k_guard``; docs/close_formation.md has how they were chosen)."""
+    """The guard's zone and response; the station keeper's ``guard_*`` and ``k_guard`` gains default to these
+    (:class:`agents.station_keeper.StationKeeperGains`; docs/close_formation.md has how they were chosen)."""
 
     guard_m: float = 5.0  # m ahead of the follower along the track where the guard starts
     window_m: float = 4.5  # m across the track about the slot within which a UAV ahead is guarded
@@ -116,8 +123,7 @@ class SeparationGuard:
         dy = g.lateral_m * ramp[active] * side[active]
         dz = g.vertical_m * ramp[active]
         dv = a[:, 3] * SETPOINT_SPEED_SCALE_MPS - g.k_speed * depth[active]
-        over = dv - np.clip(dv, -SETPOINT_SPEED_SCALE_MPS, SETPOINT_SPEED_SCALE_MPS)
-        a[:, 0] += over / self.kp_alongtrack / SETPOINT_POSITION_SCALE_M
+        a[:, 0] += speed_excess_offset_m(dv, self.kp_alongtrack) / SETPOINT_POSITION_SCALE_M
         a[:, 1] += dy / SETPOINT_POSITION_SCALE_M
         a[:, 2] += dz / SETPOINT_POSITION_SCALE_M
         a[:, 3] = dv / SETPOINT_SPEED_SCALE_MPS

@@ -83,7 +83,7 @@ from formation_env.envs.observations import (POSITION_SCALE_M, VELOCITY_SCALE_MP
 
 from .common import RowIntegrators, check_gains, observation_groups
 from .pid_formation import inverse_slog
-from .separation_guard import guard_terms, neighbour_positions
+from .separation_guard import GuardGains, guard_terms, neighbour_positions, speed_excess_offset_m
 
 __all__ = ["StationKeeperGains", "StationKeeper"]
 
@@ -129,13 +129,13 @@ class StationKeeperGains:
     # away from it across the track by guard_lateral_m and down by guard_vertical_m, times the ramp
     # min(depth / guard_m, 1)^2 (depth: m inside the guard; the full shift once it is beside), and the speed
     # demand drops k_guard m/s per m inside the guard
-    guard_m: float = 5.0
+    guard_m: float = GuardGains.guard_m
     # ... among the UAVs ahead of the slot whose lateral position is within guard_window_m of it (N-UAV formations:
     # 1.55 spans, between the 2-UAV slot's 0.96 span from the leader plus its excursions and a vee's 1.8 spans abeam)
-    guard_window_m: float = 4.5
-    k_guard: float = 1.5
-    guard_lateral_m: float = 2.0
-    guard_vertical_m: float = 1.0
+    guard_window_m: float = GuardGains.window_m
+    k_guard: float = GuardGains.k_speed
+    guard_lateral_m: float = GuardGains.lateral_m
+    guard_vertical_m: float = GuardGains.vertical_m
     # airspeed floor: below trim - speed_floor_mps the brakes (speed cut, climb) give way, k_stall per m/s
     speed_floor_mps: float = 4.0
     k_stall: float = 2.0
@@ -236,8 +236,7 @@ class StationKeeper(RowIntegrators):
         dz = dz + g.k_stall * slow
         # the speed demand beyond the speed channel's range goes through the tracker's along-track P
         # (V_demand = |V_d| - Kp_alongtrack ATD: a demand dx ahead adds Kp_alongtrack dx)
-        over = dv - np.clip(dv, -SETPOINT_SPEED_SCALE_MPS, SETPOINT_SPEED_SCALE_MPS)
-        dx = over / tr.Kp_alongtrack
+        dx = speed_excess_offset_m(dv, tr.Kp_alongtrack)
         raw = np.stack([dx / SETPOINT_POSITION_SCALE_M, dy / SETPOINT_POSITION_SCALE_M, dz / SETPOINT_POSITION_SCALE_M,
                         dv / SETPOINT_SPEED_SCALE_MPS], axis=1)
         act = np.clip(raw, -1.0, 1.0)
