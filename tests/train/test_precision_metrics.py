@@ -166,3 +166,21 @@ def test_benefit_term_pays_the_saving_up_to_its_cap():
             assert float(sim.reward_terms(0)["benefit"][1]) == pytest.approx(3.0 * min(s, cap), rel=1e-12)
             seen.append(s)
         assert max(seen) > opt + 0.05  # the cap was reached: the test covers it
+
+
+def test_throttle_saturation_fraction_reads_the_throttle_limits():
+    """``throttle_saturated_frac`` (the control-saturation measure of what limits a controller): the trim throttle
+    is never at a limit (0), a throttle held above its upper limit always is (1), whatever else the episode does."""
+    from formation_env.rollout import FunctionPolicy
+
+    cfg = dataclasses.replace(eval_env_config("close_formation", "surfaces", turbulence_sigma_mps=0.0), duration_s=2.0)
+
+    def full_throttle(obs):
+        a = np.zeros((obs.shape[0], 4), dtype=np.float32)
+        a[:, 3] = 1.0  # trim + 0.5: beyond the throttle's upper limit 1 (trim is 0.6-0.7 here)
+        return a
+
+    trim, full = (run_episodes(p, cfg, [5])[0] for p in (ZeroPolicy(), FunctionPolicy(full_throttle)))
+    assert trim["throttle_saturated_frac"] == 0.0 and 0.2 < trim["throttle_mean"] < 0.9, trim
+    assert full["throttle_saturated_frac"] == 1.0 and full["throttle_mean"] == pytest.approx(1.0), full
+    assert "throttle_saturated_frac" in summarise([trim, full], n_boot=20)

@@ -178,6 +178,8 @@ def run_episodes(policy, config, seeds: Sequence[int], *, keep_series: bool = Fa
         optima = None  # learners other than every follower: the scalar optimum caps them
     cap = optimum if optima is None else optima[None, :]
     trim = sim.trim.controls[0, :4]
+    # the throttle counts as saturated within 1e-3 of a limit (the FCS clips it exactly there)
+    thr_lo, thr_hi = sim.throttle_limits[0] + 1e-3, sim.throttle_limits[1] - 1e-3
     t = np.asarray(series["t"])
     err = np.stack(series["err"])          # (T, B, A)
     trk = np.stack(series["trk"])          # (T, B, A, 3) slot frame: along-track, lateral, vertical
@@ -211,6 +213,8 @@ def run_episodes(policy, config, seeds: Sequence[int], *, keep_series: bool = Fa
             "crashed": bool(crashed[i]),
             "control_effort_rad": float(np.sqrt(np.mean((cmd[:n, i, :, :3] - trim[:3]) ** 2))),
             "throttle_mean": float(np.mean(cmd[:n, i, :, 3])),
+            # the control-saturation measure of what limits a controller (issue 24): the throttle at either limit
+            "throttle_saturated_frac": float(np.mean((cmd[:n, i, :, 3] <= thr_lo) | (cmd[:n, i, :, 3] >= thr_hi))),
             "action_rms": float(np.sqrt(np.mean(acts[:n, i] ** 2))),
             "fuel_used_kg": float(np.mean(fuel0[i, agents] - fuel_end[i, agents])),
             "leader_fuel_kg": float(fuel0[i, 0] - fuel_end[i, 0]),

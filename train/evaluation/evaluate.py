@@ -16,6 +16,7 @@ collision / crashed            the episode ended by a collision (CG separation <
                                spans, checked at every physics step) / an envelope exit
 control_effort_rad             RMS of (elevator, aileron, rudder) minus trim, rad
 throttle_mean                  mean throttle command
+throttle_saturated_frac        fraction of the decisions with the throttle command at either limit
 action_rms                     RMS of the agent's normalised action (0 for the PID)
 fuel_used_kg, leader_fuel_kg   fuel burnt by the followers (mean) and by the leader
 fuel_saving_pct                100 (1 - follower fuel / leader fuel)
