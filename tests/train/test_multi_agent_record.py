@@ -39,7 +39,7 @@ def _refly_two(rec: dict, task: str, name: str) -> dict:
 
 
 @pytest.mark.skipif(not RECORD.is_file(), reason="no committed vee5 record")
-@pytest.mark.parametrize("task", ["vee5", "echelon3"])
+@pytest.mark.parametrize("task", ["vee5", "echelon3", "vee9"])
 def test_the_committed_record_is_what_the_policy_flies(task):
     """Two of the record's held-out sigma-1 episodes flown again with the committed zip give the recorded harvest
     ratio and formation saving (the record rounds to 6 digits); the summary is the mean of the record's own
@@ -62,3 +62,21 @@ def test_the_committed_echelon3_record_is_what_the_policy_flies():
         seed_cols = rec["episodes"][f"echelon3_ppo_setpoints_seed{k}"]
         assert len(seed_cols["harvest_ratio"]) == 100
         assert rec["summaries"][f"echelon3_ppo_setpoints_seed{k}"]["collisions"] == sum(seed_cols["collision"])
+
+
+@pytest.mark.skipif(not RECORD.is_file(), reason="no committed vee5 record")
+def test_the_committed_vee_rotation_record_is_what_the_policy_flies():
+    """The vee5 policies flown on vee_rotation without retraining, every UAV a row (issue 25): two of the record's
+    sigma-1 episodes flown again with the committed zip of seed 2 give the recorded success, collision and along-track
+    RMS; the success rate of every controller is the mean of its 100 recorded episodes."""
+    rec = _sigma1_record(RECORD, "vee_rotation")
+    name = "vee5_ppo_setpoints_seed2"
+    cols = rec["episodes"][name]
+    pol = load_policy(str(ROOT / f"{name}.zip"))
+    cfg = eval_env_config("vee_rotation", pol.action_mode, turbulence_sigma_mps=1.0, wake_fidelity=rec["wake_fidelity"])
+    eps = run_episodes(pol, cfg, cols["seed"][:2])
+    assert [e["reconfig_success"] for e in eps] == cols["reconfig_success"][:2]
+    assert [e["collision"] for e in eps] == cols["collision"][:2]
+    assert [e["rms_along_track_m"] for e in eps] == pytest.approx(cols["rms_along_track_m"][:2], rel=1e-5, abs=1e-6)
+    for ctrl, summary in rec["summaries"].items():
+        assert summary["reconfig_success_rate"] == pytest.approx(np.mean(rec["episodes"][ctrl]["reconfig_success"]))
