@@ -127,12 +127,14 @@ class _EpisodeSeries(Recorder):
         series["saving"].append(np.where(alive[:, None], out.info.induced_drag_saving[:, agents], np.nan))
         series["box"].append(np.where(alive[:, None], out.info.box_depth_m[:, agents], np.nan))
         if self.energy:  # the ELL's and the 6-DOF's drag saving at the flown state, % of the drag alone
-            acc = out.info.energy_account[:, agents]
+            # computed when read (an ELL solve per formation and per UAV alone): read once per decision, it was a
+            # third of an N-UAV evaluation's time when read twice
+            every = out.info.energy_account
+            acc = every[:, agents]
             for key, col in (("ell", "drag_saving_pct_ell"), ("sixdof", "drag_saving_pct_6dof")):
                 series[key].append(np.where(alive[:, None], acc[..., ENERGY_COLUMNS.index(col)], np.nan))
             if sim.benefit_enabled:  # the formation's induced-drag saving: every UAV's, the leader's included,
                 # against every UAV alone, 1 - sum D_i(formation) / sum D_i(alone) (the ELL's newtons)
-                every = out.info.energy_account
                 cut = every[..., ENERGY_COLUMNS.index("ell_saving_n")].sum(axis=1)
                 alone = every[..., ENERGY_COLUMNS.index("ell_induced_alone_n")].sum(axis=1)
                 with np.errstate(all="ignore"):
