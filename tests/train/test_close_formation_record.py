@@ -5,16 +5,13 @@ policies through the separation guard their sidecars name, on the wake fidelity 
 from __future__ import annotations
 
 import json
-from pathlib import Path
 
 import numpy as np
 import pytest
 
-from train.evaluation.episodes import eval_env_config, run_episodes
-from train.evaluation.policy_loader import load_policy
+from tests.train.record_refly import POLICIES, refly
 
-ROOT = Path(__file__).resolve().parents[2] / "train" / "policies"
-RECORD = ROOT / "close_formation_ppo_setpoints_levels.json"
+RECORD = POLICIES / "close_formation_ppo_setpoints_levels.json"
 
 
 @pytest.mark.skipif(not RECORD.is_file(), reason="no committed close_formation record")
@@ -24,12 +21,7 @@ def test_the_committed_record_is_what_the_guarded_policy_flies(level):
     and least separation (the record rounds to 6 digits); each seed's summary is the mean of its 100 episodes and
     its collision count their sum."""
     rec = json.loads(RECORD.read_text())["by_level"][level]
-    name = "close_formation_ppo_setpoints_seed0"
-    cols = rec["episodes"][name]
-    pol = load_policy(str(ROOT / f"{name}.zip"))
-    cfg = eval_env_config("close_formation", pol.action_mode, turbulence_sigma_mps=rec["turbulence_sigma_mps"],
-                          wake_fidelity=rec["wake_fidelity"])
-    eps = run_episodes(pol, cfg, cols["seed"][:2])
+    eps, cols = refly(rec, "close_formation", "close_formation_ppo_setpoints_seed0")
     for key in ("harvest_ratio", "rms_lateral_m", "min_separation_m"):
         assert [e[key] for e in eps] == pytest.approx(cols[key][:2], rel=1e-5, abs=1e-6)
     for k in range(3):

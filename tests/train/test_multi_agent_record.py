@@ -9,14 +9,12 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from train.evaluation.episodes import eval_env_config, run_episodes
-from train.evaluation.policy_loader import load_policy
+from tests.train.record_refly import POLICIES, refly
 
-ROOT = Path(__file__).resolve().parents[2] / "train" / "policies"
-RECORD = ROOT / "vee5_ppo_setpoints_levels.json"
+RECORD = POLICIES / "vee5_ppo_setpoints_levels.json"
 
 
-ECHELON_RECORD = ROOT / "echelon3_ppo_setpoints_levels.json"
+ECHELON_RECORD = POLICIES / "echelon3_ppo_setpoints_levels.json"
 
 
 def _sigma1_record(path: Path, task: str) -> dict:
@@ -26,13 +24,7 @@ def _sigma1_record(path: Path, task: str) -> dict:
 def _refly_two(rec: dict, task: str, name: str) -> dict:
     """Two of the record's held-out sigma-1 episodes of the committed zip ``name`` flown again: they give the
     recorded harvest ratio and formation saving (the record rounds to 6 digits). Returns the policy's columns."""
-    cols = rec["episodes"][name]
-    pol = load_policy(str(ROOT / f"{name}.zip"))
-    # flown with the wake fidelity the record was made with (the records before issue 23 part 7 name none: the
-    # nseg-10 lattice, which the N-UAV tasks flew until they moved to the converged wake)
-    cfg = eval_env_config(task, pol.action_mode, turbulence_sigma_mps=1.0,
-                          wake_fidelity=rec.get("wake_fidelity", "lattice"))
-    eps = run_episodes(pol, cfg, cols["seed"][:2])
+    eps, cols = refly(rec, task, name)
     for key in ("harvest_ratio", "formation_saving"):
         assert [e[key] for e in eps] == pytest.approx(cols[key][:2], rel=1e-5, abs=1e-6)
     return cols
@@ -70,11 +62,7 @@ def test_the_committed_vee_rotation_record_is_what_the_policy_flies():
     sigma-1 episodes flown again with the committed zip of seed 2 give the recorded success, collision and along-track
     RMS; the success rate of every controller is the mean of its 100 recorded episodes."""
     rec = _sigma1_record(RECORD, "vee_rotation")
-    name = "vee5_ppo_setpoints_seed2"
-    cols = rec["episodes"][name]
-    pol = load_policy(str(ROOT / f"{name}.zip"))
-    cfg = eval_env_config("vee_rotation", pol.action_mode, turbulence_sigma_mps=1.0, wake_fidelity=rec["wake_fidelity"])
-    eps = run_episodes(pol, cfg, cols["seed"][:2])
+    eps, cols = refly(rec, "vee_rotation", "vee5_ppo_setpoints_seed2")
     assert [e["reconfig_success"] for e in eps] == cols["reconfig_success"][:2]
     assert [e["collision"] for e in eps] == cols["collision"][:2]
     assert [e["rms_along_track_m"] for e in eps] == pytest.approx(cols["rms_along_track_m"][:2], rel=1e-5, abs=1e-6)

@@ -12,7 +12,8 @@ from .stats import N_BOOT, bootstrap_ci, wilson_interval
 __all__ = ["summarise", "selection_score", "PER_UAV_PREFIX", "per_uav_keys"]
 
 _MEAN_KEYS = ("return", "rms_slot_error_m", "rms_along_track_m", "rms_lateral_m", "rms_vertical_m", "max_slot_error_m",
-              "time_within_1m_s", "time_within_1m_frac", "control_effort_rad", "throttle_mean", "throttle_saturated_frac", "action_rms",
+              "time_within_1m_s", "time_within_1m_frac", "control_effort_rad", "throttle_mean", "throttle_saturated_frac",
+              "action_rms",
               "fuel_used_kg", "leader_fuel_kg", "fuel_saving_pct", "induced_drag_saving", "harvest_ratio",
               "harvest_ratio_uncapped",
               "drag_saving_pct_ell", "drag_saving_pct_6dof", "duration_s", "box_outside_frac", "induced_drag_saving_in_box",
