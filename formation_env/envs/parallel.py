@@ -16,6 +16,8 @@ from __future__ import annotations
 
 import functools
 
+import math
+
 import numpy as np
 from gymnasium import spaces
 from pettingzoo import ParallelEnv
@@ -53,6 +55,12 @@ def reset_options(options) -> dict | None:
 def check_action(agent: str, action) -> np.ndarray:
     """One agent's action as 4 finite floats clipped to [-1, 1]; anything else (bool, complex, strings,
     NaN/inf, another shape) is a ``ValueError`` naming ``agent``."""
+    if type(action) is np.ndarray and action.dtype.kind == "f" and action.shape == (4,):
+        # the common case (a policy's float array), without the general path's numpy calls: the same
+        # float64 values (tolist gives a float16/32 entry's exact value), clipped the same way
+        vals = action.tolist()
+        if all(map(math.isfinite, vals)):
+            return np.array([min(max(v, -1.0), 1.0) for v in vals])
     raw = np.asarray(action)
     if raw.dtype == bool:
         raise ValueError(f"action of {agent!r} is boolean; actions must be 4 real numbers in [-1, 1], got {action!r}")

@@ -40,6 +40,7 @@ from ..wake.loads import isolated_model
 from .config import EnvConfig
 from .formation import WakeConfig, resolve_fidelity, resolve_wake, wake_model_for, wake_vehicle, wing_origin_body
 from .infos import INFO_REWARD_KEYS, InfoArrays, finite_values, reward_info_key, separation_each
+from .kernels import min_separation_each
 from .observe import REWARD_TERMS, observation_size
 from .params import (TURBULENCE_CODES, ActionParams, RewardParams, StepParams, aircraft_arrays, scenario_arrays,
                      turbulence_params, wake_arrays)
@@ -342,35 +343,45 @@ class Simulation:
         after every step (TorchRL builds its info specs from the reset infos). The reward's terms are
         ``reward_<term>`` (:data:`INFO_REWARD_KEYS`; 0.0 at reset)."""
         s, out = self.state, self.output
-        err_vec = s.aircraft[i, :, POS] - s.position_demand[i]
-        separation = separation_each(s.aircraft[i], out.separation_m[i])
-        terms = out.reward_terms[i]
+        x = s.aircraft[i]
+        err_vec = x[:, POS] - s.position_demand[i]
         # a formation whose state is finite has finite infos (they derive from it): check once
-        clean = bool(np.isfinite(s.aircraft[i]).all())
+        clean = bool(np.isfinite(x).all())
+        if clean:  # the compiled distances: for finite states bit for bit separation_each's (tested), at ~1/20 the cost
+            separation = np.empty(self.n_vehicles)
+            min_separation_each(x, separation)
+        else:
+            separation = separation_each(x, out.separation_m[i])
         t = float(s.step[i] * self.dt)
+        # scalars through tolist(): the same Python floats, ints and bools as float()/int()/bool() per element
+        slot, sep, fuel = out.slot_error_m[i].tolist(), separation.tolist(), x[:, 13].tolist()
+        status, crashed, box = s.status[i].tolist(), out.crashed[i].tolist(), out.box_depth_m[i].tolist()
+        terms, reward, collided = out.reward_terms[i].tolist(), out.reward[i].tolist(), bool(out.collided[i])
+        saving = out.saving[i].tolist() if self.benefit_enabled else None
+        term_keys = INFO_REWARD_KEYS[:-1]
         result = []
         for v in range(self.n_vehicles):
             info = {
                 "time_s": t,
-                "slot_error_m": float(out.slot_error_m[i, v]),
+                "slot_error_m": slot[v],
                 "slot_error_ned_m": err_vec[v].copy(),
-                "min_separation_m": float(separation[v]),
+                "min_separation_m": sep[v],
                 "induced_wind_ned_mps": s.induced_wind_ned[i, v].copy(),
                 "induced_omega_body_rad_s": s.induced_omega_body[i, v].copy(),
-                "fuel_kg": float(s.aircraft[i, v, 13]),
+                "fuel_kg": fuel[v],
                 "gust_ned_mps": s.gust_ned[i, v].copy(),
                 "gust_omega_body_rad_s": s.gust_omega_body[i, v].copy(),
-                "status": int(s.status[i, v]),
-                "collision": bool(out.collided[i]),
-                "crashed": bool(out.crashed[i, v]),
+                "status": int(status[v]),
+                "collision": collided,
+                "crashed": bool(crashed[v]),
                 "command": s.command[i, v].copy(),
             }
-            if self.benefit_enabled:
-                info["induced_drag_saving"] = float(out.saving[i, v])
-            info["box_depth_m"] = float(out.box_depth_m[i, v])
-            for j, key in enumerate(INFO_REWARD_KEYS[:-1]):
-                info[key] = float(terms[v, j])
-            info[INFO_REWARD_KEYS[-1]] = float(out.reward[i, v])
+            if saving is not None:
+                info["induced_drag_saving"] = saving[v]
+            info["box_depth_m"] = box[v]
+            for j, key in enumerate(term_keys):
+                info[key] = terms[v][j]
+            info[INFO_REWARD_KEYS[-1]] = reward[v]
             if not clean:
                 finite_values(info)
             result.append(info)

@@ -1,0 +1,86 @@
+"""The decision's Python-side shortcuts (issue 26, single env): each must give exactly what the general path
+gives. The compiled entry point resolved once per Simulation (formation_env.sim.step._EntryPoints) against
+numba's dispatcher; the infos' compiled separations against separation_each; the adapters' fast action check
+against the general one."""
+
+import numpy as np
+import pytest
+
+import formation_env
+import formation_env.sim.step as step_mod
+from formation_env.envs.parallel import check_action
+from formation_env.sim import EnvConfig, Randomisation, Simulation
+from formation_env.sim.infos import separation_each
+
+
+def _sim():
+    cfg = EnvConfig(scenario="echelon3", action_mode="setpoints", learning="followers",
+                    randomisation=Randomisation(turbulence_sigma_mps=1.0))
+    return Simulation(cfg, batch_size=2)
+
+
+def test_entry_point_steps_bit_for_bit_as_the_dispatcher():
+    a, b = _sim(), _sim()
+    a.reset(seeds=[11, 12])
+    b.reset(seeds=[11, 12])
+    rng = np.random.default_rng(3)
+    for _ in range(6):
+        act = rng.uniform(-1, 1, size=(2, a.n_agents, 4))
+        a.step(act)  # through the resolved entry point
+        # b through numba's dispatcher: a Fortran-ordered actions array never takes the fast path
+        b._actions[:, b.agent_mask] = act
+        fortran = np.asfortranarray(b._actions)
+        assert step_mod._ENTRY.get(b.params, b.state, fortran, b.output) is step_mod.decide_range
+        step_mod.step(b.params, b.state, fortran, b.output)
+        for name in ("observation", "reward", "terminated", "truncated", "separation_m", "slot_error_m"):
+            assert np.array_equal(getattr(a.output, name), getattr(b.output, name)), name
+        assert np.array_equal(a.state.aircraft, b.state.aircraft)
+    entry = step_mod._ENTRY.get(a.params, a.state, a._actions, a.output)
+    assert entry is not step_mod.decide_range  # the fast path was taken for the Simulation's own arrays
+    assert step_mod._ENTRY.get(a.params, a.state, a._actions, a.output) is entry  # resolved once
+
+
+def test_entry_point_cache_is_bounded_and_checks_identity():
+    cache = step_mod._EntryPoints()
+    sims = [_sim() for _ in range(cache.SIZE + 2)]
+    for s in sims:
+        s.reset(seeds=[1, 2])
+        cache.get(s.params, s.state, s._actions, s.output)
+    assert len(cache.cache) == cache.SIZE
+    s = sims[-1]
+    key = (id(s.params), id(s.state), id(s.output))
+    entry, params, state, out = cache.cache[key]
+    assert params is s.params and state is s.state and out is s.output
+    # an object at a cached id but not the cached object (as after garbage collection) is resolved anew
+    cache.cache[key] = ("stale", object(), state, out)
+    assert cache.get(s.params, s.state, s._actions, s.output) == entry
+
+
+def test_info_separations_equal_separation_each_bit_for_bit():
+    env = formation_env.parallel_env("vee5", action_mode="setpoints", learning="followers")
+    env.reset(seed=5)
+    rng = np.random.default_rng(0)
+    for _ in range(8):
+        acts = {a: rng.uniform(-1, 1, 4).astype(np.float32) for a in env.agents}
+        _, _, _, _, infos = env.step(acts)
+        x = env.sim.state.aircraft[0]
+        ref = separation_each(x, env.sim.output.separation_m[0])
+        got = [infos[a]["min_separation_m"] for a in env.possible_agents]
+        assert [float(ref[int(a.split("_")[1])]) for a in env.possible_agents] == got
+        assert all(type(v) is float for v in got)
+
+
+@pytest.mark.parametrize("action", [
+    np.array([0.3, -0.7, 1.5, -2.0], np.float32), np.array([-0.0, 0.0, 1.0, -1.0]),
+    np.array([1e-8, 0.99999994, -3e38, 7.0], np.float32), np.array([0.1, 0.2, 0.3, 0.4], np.float16)])
+def test_fast_action_check_equals_the_general_path(action):
+    got = check_action("uav_1", action)
+    ref = np.clip(np.asarray(action, dtype=float), -1.0, 1.0)
+    assert got.dtype == np.float64 and got.shape == (4,)
+    assert np.array_equal(got, ref) and np.array_equal(np.signbit(got), np.signbit(ref))
+
+
+@pytest.mark.parametrize("bad", [np.array([0.0, np.nan, 0.0, 0.0], np.float32), np.array([np.inf, 0, 0, 0.0])])
+def test_fast_action_check_still_rejects_non_finite(bad):
+    with pytest.raises(ValueError, match="uav_1.*NaN or inf"):
+        check_action("uav_1", bad)
