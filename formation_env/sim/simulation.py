@@ -359,22 +359,26 @@ class Simulation:
         terms, reward, collided = out.reward_terms[i].tolist(), out.reward[i].tolist(), bool(out.collided[i])
         saving = out.saving[i].tolist() if self.benefit_enabled else None
         term_keys = INFO_REWARD_KEYS[:-1]
+        # one copy per quantity for the whole formation (each UAV's info holds a row of it): the infos never
+        # share memory with the state
+        wind, omega = s.induced_wind_ned[i].copy(), s.induced_omega_body[i].copy()
+        gust, gust_omega, command = s.gust_ned[i].copy(), s.gust_omega_body[i].copy(), s.command[i].copy()
         result = []
         for v in range(self.n_vehicles):
             info = {
                 "time_s": t,
                 "slot_error_m": slot[v],
-                "slot_error_ned_m": err_vec[v].copy(),
+                "slot_error_ned_m": err_vec[v],
                 "min_separation_m": sep[v],
-                "induced_wind_ned_mps": s.induced_wind_ned[i, v].copy(),
-                "induced_omega_body_rad_s": s.induced_omega_body[i, v].copy(),
+                "induced_wind_ned_mps": wind[v],
+                "induced_omega_body_rad_s": omega[v],
                 "fuel_kg": fuel[v],
-                "gust_ned_mps": s.gust_ned[i, v].copy(),
-                "gust_omega_body_rad_s": s.gust_omega_body[i, v].copy(),
+                "gust_ned_mps": gust[v],
+                "gust_omega_body_rad_s": gust_omega[v],
                 "status": int(status[v]),
                 "collision": collided,
                 "crashed": bool(crashed[v]),
-                "command": s.command[i, v].copy(),
+                "command": command[v],
             }
             if saving is not None:
                 info["induced_drag_saving"] = saving[v]
