@@ -6,7 +6,9 @@
 # curves and validation history (echelon3, issue 25: seeds 0 and 1 two at a time, seed 2 beside their held-out
 # evaluation; issue 23 part 7: close_formation, echelon3, wake_surfing and wake_surfing_random_leader retrained on the
 # converged wake with the same commands, sharing the two cores with evaluations and sweeps; issues 24/25: close_formation
-# and vee5 retrained with the saving weighted 8, now their recipes' value, the same commands). Usage: bash train/committed_runs.sh [RUNS_DIR]
+# and vee5 retrained with the saving weighted 8, now their recipes' value, the same commands; vee5_mappo retrained on the
+# converged wake with the same command: seeds 0 and 1 two at a time, seed 2 beside their held-out evaluation).
+# Usage: bash train/committed_runs.sh [RUNS_DIR]
 set -euo pipefail
 cd "$(dirname "$0")/.."
 RUNS=${1:-runs/committed}
