@@ -104,7 +104,7 @@ def _clear_wake(held_wind, held_omega, gamma):
 
 @_jit
 def step_one(state, controls, ambient, turb, turb_omega, held_wind, held_omega, gamma, update_wake, wake_on, wake,
-             coupling, aircraft, dt, out_state, out_status):
+             coupling, aircraft, dt, out_state, out_status, keep=None):
     """One formation (V aircraft) by one step dt: ELL induced wind when ``update_wake`` (held
     otherwise; held_wind/held_omega/gamma are updated in place), RK4, envelope status.
 
@@ -114,7 +114,8 @@ def step_one(state, controls, ambient, turb, turb_omega, held_wind, held_omega, 
     :class:`~formation_env.wake.coupling.CouplingArrays` (the thesis's effective wind or the load-weighted
     wind, :func:`~formation_env.wake.coupling.coupled_wind`), ``aircraft`` an
     :class:`~formation_env.sim.params.AircraftArrays`. A formation with an aircraft outside the
-    envelope gets no wake solve and zero induced wind (its episode is ending)."""
+    envelope gets no wake solve and zero induced wind (its episode is ending). ``keep``: the solve's AIC and
+    right-hand side before elimination (:func:`formation_env.wake.aic.assemble_and_solve`; None or empty: not kept)."""
     ac = aircraft
     nv = state.shape[0]
     wind = np.zeros((nv, 12))
@@ -139,7 +140,7 @@ def step_one(state, controls, ambient, turb, turb_omega, held_wind, held_omega, 
             beta = np.empty(nv)
             ell_inputs(state, ambient, wake.wing_origin_body, pos, euler, speed, alpha, beta)
             coupled_wind(wake, coupling, pos, euler, speed, alpha, beta, gamma, np.empty((wake.panel_left_knot.shape[0], 3)),
-                         held_wind, np.empty((nv, 3)), held_omega, np.empty((nv, 3)))
+                         held_wind, np.empty((nv, 3)), held_omega, np.empty((nv, 3)), keep)
             # The ELL stays bounded at any separation (the overlap core); should a solve still come
             # out non-finite (degenerate input), the formation flies without induced wind this step
             # rather than feeding NaN to the aircraft.

@@ -31,7 +31,7 @@ from ..atmosphere.spectral_field_kernels import sample_modes_one
 from ..control.law import N_CSTATE, fcs_update
 from ..frames import quaternion_dcm_terms, track_to_ned_xy
 from ..wake.arrays import evaluate_formation
-from ..wake.benefit import induced_drag_saving_one
+from ..wake.benefit import AIR_DENSITY_SL, induced_drag_saving_one
 from .guidance import formation_demands, gust_wind_ned, reference_path, schedule_features
 from .kernels import ell_inputs, min_separation_each, position_finite, separation_each_known, step_one, step_separation
 from .observe import box_depth_each, observe_formation, reward_formation, slot_error
@@ -93,6 +93,8 @@ class DecisionScratch(NamedTuple):
     ell_beta: np.ndarray  # (V,)
     last_pos: np.ndarray  # (V, 3) last finite CG position of each UAV, m NED
     known: np.ndarray  # (V,) bool: a finite position of the UAV was seen
+    aic_keep: np.ndarray  # (N, N + 1) the last substep's AIC and right-hand side before elimination (benefit on), else (0, 0)
+    no_keep: np.ndarray  # (0, 0): the other substeps keep nothing
     field: FieldScratch
 
 
@@ -105,17 +107,19 @@ def field_scratch(nv):
 
 
 @_jit
-def decision_scratch(s, b):
+def decision_scratch(s, b, benefit_on=False):
     """A :class:`DecisionScratch` for formation b, with the finite positions of its current state
-    recorded (:func:`record_finite_positions`)."""
+    recorded (:func:`record_finite_positions`); with ``benefit_on`` room to keep the last substep's AIC."""
     nv = s.aircraft.shape[1]
+    n_keep = s.circulation.shape[1] if benefit_on else 0
     sc = DecisionScratch(
         ambient=np.empty((nv, 3)), velocity=np.empty((nv, 3)), command=np.empty((nv, 4)),
         new_state=np.empty((nv, s.aircraft.shape[2])), pre_state=np.empty((nv, s.aircraft.shape[2])),
         status=np.zeros(nv, dtype=np.int64), status_any=np.zeros(nv, dtype=np.int64), gust3=np.empty(3),
         zero_turb=np.zeros((nv, 3)), wind12=np.zeros(12), pd3=np.empty(3), vd3=np.empty(3), rate=np.empty(N_CSTATE), signals=np.empty(10), ell_pos=np.empty((nv, 3)),
         ell_euler=np.empty((nv, 3)), ell_speed=np.empty(nv), ell_alpha=np.empty(nv), ell_beta=np.empty(nv),
-        last_pos=np.empty((nv, 3)), known=np.zeros(nv, dtype=np.bool_), field=field_scratch(nv))
+        last_pos=np.empty((nv, 3)), known=np.zeros(nv, dtype=np.bool_),
+        aic_keep=np.empty((n_keep, n_keep + 1)), no_keep=np.empty((0, 0)), field=field_scratch(nv))
     record_finite_positions(s, b, sc)
     return sc
 
@@ -267,7 +271,7 @@ def physics_and_events(p, s, b, last_substep, sc):
     update = s.step[b] % p.wake_update_every == 0
     step_one(s.aircraft[b], sc.command, sc.ambient, sc.zero_turb, s.gust_omega_body[b], s.induced_wind_ned[b],
              s.induced_omega_body[b], s.circulation[b], update, p.wake_on, p.wake, p.coupling, p.aircraft, p.dt_s,
-             sc.new_state, sc.status)
+             sc.new_state, sc.status, sc.aic_keep if solved else sc.no_keep)
     if solved:  # step_one solved unless the formation was outside the envelope (gamma zeroed)
         solved = False
         for k in range(s.circulation.shape[1]):
@@ -431,8 +435,9 @@ def formation_saving(p, s, b, crashed_any, solved_last, sc, o):
             for a in range(sc.known.shape[0]):
                 o.saving[b, a] = 0.0
         elif solved_last:
+            # the isolated circulations from the diagonal blocks of that solve's AIC (kept by physics_and_events)
             induced_drag_saving_one(p.wake, p.wake_alone, sc.ell_pos, sc.ell_euler, sc.ell_speed, sc.ell_alpha,
-                                    sc.ell_beta, s.circulation[b], o.saving[b])
+                                    sc.ell_beta, s.circulation[b], o.saving[b], AIR_DENSITY_SL, sc.aic_keep)
         else:
             ambient_wind(p.scenario, s, b, s.step[b] * p.dt_s, sc.ambient, sc.gust3)
             formation_benefit(p, s, b, sc.ambient, o.saving[b])

@@ -76,7 +76,7 @@ def decide_one(p, s, b, actions, o):
     separation (a step that also made a state non-finite is judged from its pre-step positions and
     velocities, :func:`formation_env.sim.kernels.step_separation`). A UAV whose state went non-finite
     is measured (slot error, separation) at its last finite position, so ``o`` never carries NaN."""
-    sc = decision_scratch(s, b)
+    sc = decision_scratch(s, b, p.benefit_on)
     min_sep = np.inf
     # formation benefit: read off the last substep's ELL solve (its poses and circulation), which
     # the physics needs anyway; a fresh solve only when that substep had none

@@ -94,7 +94,7 @@ def assemble_and_solve(
     x1, x3, bound_dir, chord_dir, trail, vel, rot, pos, origin, airspeed,
     knot_vehicle, knot_surface, surface_core_scale, panel_left_knot, panel_vehicle,
     control_b, normal_b, aic_static, cutoff, aic_core_mode, nu, overlap_core, aic, gamma, r1, inv1, r3, inv3,
-    vcross, sheet=None,
+    vcross, sheet=None, keep=None,
 ):
     """Build the AIC over every panel of every vehicle and solve for the circulations (4.25-4.69).
 
@@ -114,6 +114,12 @@ def assemble_and_solve(
     that the other vehicles' field at the control points is ``sum_p vcross[j, p] gamma[p]`` without
     evaluating the branches again (:func:`formation_env.wake.kernels.evaluate_one`). The AIC itself is
     computed exactly as without it (the same dot products, bit for bit).
+
+    ``keep`` (N, N + 1) or None: when given (and not empty), receives the assembled AIC (columns 0..N-1) and the
+    right-hand side (column N) before the elimination overwrites them. A vehicle's diagonal block of it is that
+    vehicle's AIC alone, bit for bit (its own branches only, the same operations in the same order), which the
+    formation benefit solves for the isolated circulation instead of posing and assembling the lone vehicle again
+    (:func:`formation_env.wake.benefit.induced_drags_one`; issue 26).
     """
     n_panels = panel_left_knot.shape[0]
     n_knots = x1.shape[0]
@@ -176,4 +182,9 @@ def assemble_and_solve(
                     vcross[j, p, 1] = lcv[k, 1] + by - lcv[k + 1, 1]
                     vcross[j, p, 2] = lcv[k, 2] + bz - lcv[k + 1, 2]
         gamma[j] = vel[vj, 0] * nrm[0] + vel[vj, 1] * nrm[1] + vel[vj, 2] * nrm[2]
+    if keep is not None and keep.shape[0] > 0:
+        for j in range(n_panels):
+            for p in range(n_panels):
+                keep[j, p] = aic[j, p]
+            keep[j, n_panels] = gamma[j]
     lu_solve_inplace(aic, gamma)

@@ -68,12 +68,13 @@ def wake_arrays(model, wing_origin_body) -> WakeArrays:
 
 @nb.njit(cache=True, error_model="numpy")
 def evaluate_formation(w, pos, euler, airspeed, alpha, beta, gamma_out, vpts_out, wind_ned_out, wind_b_out, omega_b_out,
-                       omega_ned_out):
+                       omega_ned_out, keep=None):
     """:func:`formation_env.wake.kernels.evaluate_one` (pose, joint solve, effective wind; Eqs. 4.4-4.7)
-    of one formation with its lattice as the struct ``w`` (:class:`WakeArrays`)."""
+    of one formation with its lattice as the struct ``w`` (:class:`WakeArrays`); ``keep`` as
+    :func:`formation_env.wake.aic.assemble_and_solve`'s."""
     evaluate_one(pos, euler, airspeed, alpha, beta, w.knot_x1_b, w.knot_x3_b, w.knot_vehicle, w.knot_surface,
                  w.surface_origin_b, w.surface_vehicle, w.surface_knot_start, w.surface_panel_start,
                  w.surface_core_scale, w.panel_left_knot, w.panel_vehicle, w.control_b, w.normal_b, w.aic_static,
                  w.eval_b, w.grad_w, w.vehicle_panel_start, w.cutoff_m, w.core_mode, w.aic_core_mode,
                  w.kinematic_viscosity, gamma_out, vpts_out, wind_ned_out, wind_b_out, omega_b_out, omega_ned_out,
-                 w.overlap_core_m, w.sheet)
+                 w.overlap_core_m, w.sheet, keep)

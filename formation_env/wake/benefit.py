@@ -27,7 +27,7 @@ import numba as nb
 import numpy as np
 
 from .arrays import evaluate_formation
-from .aic import assemble_and_solve
+from .aic import assemble_and_solve, lu_solve_inplace
 from .biot_savart import branch, leg, point_to_knots
 from .kernels import CORE_NONE, field_velocity, posed_lattice
 from .residual import add_saving_residual
@@ -204,14 +204,18 @@ def _wind_axis_drag(rot, f, alpha, beta):
 
 @_jit
 def induced_drags_one(wake, wake_alone, pos, euler, speed, alpha, beta, gamma_formation, out_formation, out_alone,
-                      air_density=AIR_DENSITY_SL):
+                      air_density=AIR_DENSITY_SL, keep=None):
     """Induced drag (N, wind axes) of each of the V vehicles of one formation in formation (``out_formation``
     (V,), for the circulation ``gamma_formation`` (N,) solved at these poses by ``evaluate_one``) and alone at
     the same pose and air data (``out_alone`` (V,): each vehicle's circulation from ``wake_alone`` solved
     alone, :func:`isolated_circulation_one`; every vehicle must be of the make-up ``wake_alone`` describes: its
     panels those of each vehicle of ``wake``, in order, else a ValueError). Bit for bit :func:`induced_drag_one`
     and :func:`isolated_induced_drag_one` (tested), from one pass over the bound vortices: the own horseshoes'
-    branches evaluated once for both circulations (:func:`_own_field_pair`)."""
+    branches evaluated once for both circulations (:func:`_own_field_pair`). ``keep`` (N, N + 1), not None: the AIC and
+    right-hand side of the solve that gave ``gamma_formation``, before elimination
+    (:func:`formation_env.wake.aic.assemble_and_solve`); each vehicle's isolated circulation is then its diagonal
+    block solved, bit for bit what posing and solving it alone gives (the same entries, tested), without the posing
+    and assembly (issue 26)."""
     nv = pos.shape[0]
     n_panels = wake.panel_left_knot.shape[0]
     n_alone = wake_alone.panel_left_knot.shape[0]
@@ -221,9 +225,18 @@ def induced_drags_one(wake, wake_alone, pos, euler, speed, alpha, beta, gamma_fo
                              "(every vehicle must be of the make-up wake_alone describes)")
     gamma_alone = np.empty(n_panels)
     g1 = np.empty(n_alone)
+    reuse = keep is not None and keep.shape[0] == n_panels
+    blk = np.empty((n_alone, n_alone) if reuse else (0, 0))
     for v in range(nv):
-        isolated_circulation_one(wake_alone, v, pos, euler, speed, alpha, beta, g1)
         p0 = wake.vehicle_panel_start[v]
+        if reuse:
+            for i in range(n_alone):
+                for c in range(n_alone):
+                    blk[i, c] = keep[p0 + i, p0 + c]
+                g1[i] = keep[p0 + i, n_panels]
+            lu_solve_inplace(blk, g1)
+        else:
+            isolated_circulation_one(wake_alone, v, pos, euler, speed, alpha, beta, g1)
         for i in range(n_alone):
             gamma_alone[p0 + i] = g1[i]
     rot, vel, trail, x1, x3, origin, bound_dir, chord_dir, r1, inv1, r3, inv3 = posed_lattice(
@@ -255,7 +268,7 @@ def induced_drags_one(wake, wake_alone, pos, euler, speed, alpha, beta, gamma_fo
 
 @_jit
 def induced_drag_saving_one(wake, wake_alone, pos, euler, speed, alpha, beta, gamma_formation, out_saving,
-                            air_density=AIR_DENSITY_SL):
+                            air_density=AIR_DENSITY_SL, keep=None):
     """Induced-drag saving 1 - D_i(formation) / D_i(alone) of each vehicle of one formation into
     ``out_saving`` (V,) (0 where D_i(alone) is 0), the drags from :func:`induced_drags_one` (nothing is
     solved for the formation here: ``gamma_formation`` (N,) is its circulation at these poses, from
@@ -264,7 +277,8 @@ def induced_drag_saving_one(wake, wake_alone, pos, euler, speed, alpha, beta, ga
     nv = pos.shape[0]
     d_form = np.empty(nv)
     d_alone = np.empty(nv)
-    induced_drags_one(wake, wake_alone, pos, euler, speed, alpha, beta, gamma_formation, d_form, d_alone, air_density)
+    induced_drags_one(wake, wake_alone, pos, euler, speed, alpha, beta, gamma_formation, d_form, d_alone, air_density,
+                      keep)
     for v in range(nv):
         out_saving[v] = 1.0 - d_form[v] / d_alone[v] if abs(d_alone[v]) > 0.0 else 0.0
         if wake.saving_scale != 1.0:  # the span-efficiency correction (WakeModel saving_scale)

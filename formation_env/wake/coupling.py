@@ -211,14 +211,14 @@ def load_weighted_wind(rot, vpts, gamma, c, vehicle_panel_start, wind_ned_out, w
 
 @_jit
 def coupled_wind(wake, coupling, pos, euler, speed, alpha, beta, gamma_out, vpts_out, wind_ned_out, wind_b_out,
-                 omega_b_out, omega_ned_out):
+                 omega_b_out, omega_ned_out, keep=None):
     """The ELL solve of one formation (:func:`formation_env.wake.arrays.evaluate_formation`: pose, joint
     solve, the thesis's effective wind) and, with the ``load_weighted`` coupling, the load-weighted wind
     in its place, plus, where ``wake.residual`` is a table, every ordered pair's residual
     (:func:`formation_env.wake.residual.add_wind_residual`). Arguments as ``evaluate_formation``'s, ``coupling`` a
     :class:`CouplingArrays`."""
     evaluate_formation(wake, pos, euler, speed, alpha, beta, gamma_out, vpts_out, wind_ned_out, wind_b_out,
-                       omega_b_out, omega_ned_out)
+                       omega_b_out, omega_ned_out, keep)
     if coupling.mode == LOAD_WEIGHTED:
         nv = pos.shape[0]
         rot = np.empty((nv, 3, 3))

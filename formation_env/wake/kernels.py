@@ -49,7 +49,7 @@ def evaluate_one(
     surface_origin_b, surface_vehicle, surface_knot_start, surface_panel_start, surface_core_scale,
     panel_left_knot, panel_vehicle, control_b, normal_b, aic_static, eval_b, grad_w, vehicle_panel_start,
     cutoff, core_mode, aic_core_mode, nu,
-    gamma_out, vpts_out, wind_ned_out, wind_b_out, omega_b_out, omega_ned_out, overlap_core=-1.0, sheet=None,
+    gamma_out, vpts_out, wind_ned_out, wind_b_out, omega_b_out, omega_ned_out, overlap_core=-1.0, sheet=None, keep=None,
 ):
     """One formation: pose, joint solve, induced velocity at the evaluation points (other
     vehicles only) and the effective translational and rotational wind per vehicle.
@@ -58,7 +58,7 @@ def evaluate_one(
     the default overlap core of this lattice, :func:`default_overlap_core` (what ``WakeModel``
     uses unless told otherwise). ``sheet`` (None: the thesis; a float, :data:`SHEET_ON`: a compile-time
     switch): the other vehicles' trailing legs take the sheet law near their wake plane in the solve and the
-    field (``WakeModel.sheet``)."""
+    field (``WakeModel.sheet``). ``keep``: see :func:`formation_env.wake.aic.assemble_and_solve`."""
     if overlap_core < 0.0:
         overlap_core = default_overlap_core(knot_x1_b, knot_x3_b, surface_knot_start)
     n_panels = panel_left_knot.shape[0]
@@ -74,7 +74,7 @@ def evaluate_one(
     vcross = np.empty((n_panels, n_panels, 3) if shared else (0, 0, 3))
     assemble_and_solve(x1, x3, bound_dir, chord_dir, trail, vel, rot, pos, origin, airspeed, knot_vehicle, knot_surface,
                        surface_core_scale, panel_left_knot, panel_vehicle, control_b, normal_b, aic_static, cutoff,
-                       aic_core_mode, nu, overlap_core, aic, gamma_out, r1, inv1, r3, inv3, vcross, sheet)
+                       aic_core_mode, nu, overlap_core, aic, gamma_out, r1, inv1, r3, inv3, vcross, sheet, keep)
     if shared:
         for j in range(n_panels):
             v = panel_vehicle[j]

@@ -192,3 +192,43 @@ def test_a_lone_lattice_of_another_make_up_is_refused():
                                                              state.airspeed_mps, state.alpha_rad, state.beta_rad)]
     with pytest.raises(ValueError, match="make-up"):
         induced_drags_one(wake, other, *args, np.zeros(20), np.empty(2), np.empty(2))
+
+
+@pytest.mark.parametrize("n, offsets, kind, sheet", [
+    (2, [(0.0, 0.0, 0.0), (-2.0, 0.96, 0.1)], "aerosonde", False),
+    (2, [(0.0, 0.0, 0.0), (-2.0, 0.93, 0.0)], "aerosonde", True),    # on the wake plane, the sheet law
+    (3, [(0.0, 0.0, 0.0), (-2.0, 0.96, 0.1), (-4.0, 1.92, 0.2)], "tail", False),
+    (2, [(0.0, 0.0, 0.0), (-0.3, 0.2, 0.05)], "aerosonde", False),  # overlapping wings
+], ids=["close_slot", "wake_plane_sheet", "echelon_tail", "overlap"])
+def test_isolated_circulation_from_the_kept_aic_is_bit_for_bit_the_lone_solve(n, offsets, kind, sheet):
+    """Issue 26: the formation solve keeps its AIC before elimination, and the benefit solves each vehicle's
+    diagonal block instead of posing and assembling the vehicle alone. The block must be the lone AIC entry for
+    entry, so the saving is bit for bit the one from the separate lone solves, for every configuration the envs
+    use (the sheet law's other-vehicle legs do not enter a diagonal block; nor does the overlap core)."""
+    from formation_env.geometry import aerosonde
+    from formation_env.sim.params import wake_arrays
+    from formation_env.wake.arrays import evaluate_formation
+    from formation_env.wake.loads import isolated_model
+
+    vehicles = [aerosonde(tailplane=True) if kind == "tail" else aerosonde() for _ in range(n)]
+    model = WakeModel(vehicles, sheet=sheet) if sheet else WakeModel(vehicles)
+    state = _state(offsets, batch=5, seed=17)
+    wake = wake_arrays(model, np.zeros(3))
+    alone = wake_arrays(isolated_model(vehicles[0], model.core, model.eval_points, model.rotational,
+                                       model.kinematic_viscosity, model.viscous_aic), np.zeros(3))
+    N = model.n_panels
+    for b in range(state.batch_size):
+        args = [np.ascontiguousarray(x[b], dtype=float) for x in (state.position_ned, state.euler_rad,
+                                                                 state.airspeed_mps, state.alpha_rad, state.beta_rad)]
+        gamma, keep = np.empty(N), np.full((N, N + 1), np.nan)
+        evaluate_formation(wake, *args, gamma, np.empty((N, 3)), np.empty((n, 3)), np.empty((n, 3)), np.empty((n, 3)),
+                           np.empty((n, 3)), keep)
+        gamma_plain = np.empty(N)
+        evaluate_formation(wake, *args, gamma_plain, np.empty((N, 3)), np.empty((n, 3)), np.empty((n, 3)),
+                           np.empty((n, 3)), np.empty((n, 3)))
+        assert np.array_equal(gamma, gamma_plain) and np.all(np.isfinite(keep))  # keeping changes nothing
+        reused, separate = np.empty(n), np.empty(n)
+        induced_drag_saving_one(wake, alone, *args, gamma, reused, 1.225, keep)
+        induced_drag_saving_one(wake, alone, *args, gamma, separate)
+        assert np.array_equal(reused, separate)
+        assert np.any(reused != 0.0)
