@@ -72,14 +72,15 @@ def energy_account_one(wake, wake_alone, coupling, ac, x, cmd, ambient, ambient_
     n = wake.panel_left_knot.shape[0]
     gamma = np.empty(n)
     wind_ned, wind_b, omega_b, omega_ned = np.empty((nv, 3)), np.empty((nv, 3)), np.empty((nv, 3)), np.empty((nv, 3))
+    keep = np.empty((n, n + 1))  # the solve's AIC before elimination: the UAVs' lone AICs are its diagonal blocks
     coupled_wind(wake, coupling, pos, euler, speed, alpha, beta, gamma, np.empty((n, 3)), wind_ned, wind_b, omega_b,
-                 omega_ned)
+                 omega_ned, keep)
     for a in range(nv):
         for i in range(3):
             if not (math.isfinite(wind_ned[a, i]) and math.isfinite(omega_b[a, i])):
                 return
     d_form, d_alone = np.empty(nv), np.empty(nv)
-    induced_drags_one(wake, wake_alone, pos, euler, speed, alpha, beta, gamma, d_form, d_alone, 1.0)
+    induced_drags_one(wake, wake_alone, pos, euler, speed, alpha, beta, gamma, d_form, d_alone, 1.0, keep)
     w12 = np.zeros(12)
     vb = np.empty(3)
     for a in range(nv):
