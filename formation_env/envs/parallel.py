@@ -15,7 +15,6 @@ non-finite state; truncated at the scenario's duration.
 from __future__ import annotations
 
 import functools
-
 import math
 
 import numpy as np

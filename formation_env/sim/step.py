@@ -256,11 +256,8 @@ class _EntryPoints:
             return hit[0]
         entry = decide_range
         try:
-            from numba import types
-
             decide_range(params, state, actions, out, 0, 0)  # compiles or loads it (no formation stepped)
-            sig = tuple(decide_range.typeof_pyval(x) for x in (params, state, actions, out)) + (types.int64,
-                                                                                                 types.int64)
+            sig = tuple(decide_range.typeof_pyval(x) for x in (params, state, actions, out)) + (nb.types.int64,) * 2
             entry = decide_range.overloads[sig].entry_point
         except Exception:  # noqa: BLE001 - an unexpected numba layout: the dispatcher serves every call
             entry = decide_range
