@@ -59,6 +59,10 @@ def register(sub) -> None:
                    help="how finely the ELL resolves the wake (default: the scenario's; converged in close_formation "
                         "and the N-UAV close formations, lattice elsewhere): lattice (the thesis's discrete legs), "
                         "sheet (the sheet law), converged (sheet law, span correction, residual table of pairs)")
+    p.add_argument("--throttle-max", type=float, default=1.0,
+                   help="the flight control's throttle ceiling for every UAV, 0.8..2 (default 1, the Aerosonde's full "
+                        "throttle); above 1 a counterfactual engine, for measuring what thrust authority limits a "
+                        "controller (a ceiling, not an aircraft)")
     p.add_argument("--benefit", action="store_true", help="also compute the ELL induced-drag saving (slow)")
     p.add_argument("--action-mode", default=None, choices=ACTION_MODES,
                    help="action mode of the zips when no sidecar JSON / config.yaml says it")
@@ -117,7 +121,8 @@ def run(args) -> int:
                               seeds=args.seeds, wake=not args.no_wake, compute_benefit=args.benefit,
                               action_mode=args.action_mode, out_dir=out, overwrite=args.overwrite,
                               plots=not args.no_plots, duration_s=args.duration, turbulence_field=args.turbulence_field,
-                              wake_fidelity=args.wake_fidelity, ablations=args.ablate or (), log=print, **({} if args.bootstrap_resamples is None else {"n_boot": args.bootstrap_resamples}))
+                              wake_fidelity=args.wake_fidelity, throttle_max=args.throttle_max,
+                              ablations=args.ablate or (), log=print, **({} if args.bootstrap_resamples is None else {"n_boot": args.bootstrap_resamples}))
         print(res["table_markdown"])
         print(f"wrote {out}/levels.md, levels.json and " + ", ".join(f"sigma_{v:g}/" for v in levels))
         return 0
@@ -125,7 +130,7 @@ def run(args) -> int:
                    turbulence_sigma_mps=levels[0], wake=not args.no_wake, compute_benefit=args.benefit,
                    action_mode=args.action_mode, out_dir=out, overwrite=args.overwrite, plots=not args.no_plots,
                    duration_s=args.duration, turbulence_field=args.turbulence_field, ablations=args.ablate or (),
-                   wake_fidelity=args.wake_fidelity, log=print,
+                   wake_fidelity=args.wake_fidelity, throttle_max=args.throttle_max, log=print,
                    **({} if args.bootstrap_resamples is None else {"n_boot": args.bootstrap_resamples}))
     print(rep["table_markdown"])
     if rep["comparison_markdown"]:

@@ -37,6 +37,10 @@ OPTION_RANGES: dict[str, tuple[float, float, str, str]] = {
                              "dt, 0.02 s in every built-in scenario), at most MAX_DURATION_S (one hour of flight)"),
     "EnvConfig.wake_update_every": (1, 50, "physics steps", "integer; ELL solves held at most 1 s (50 steps at "
                                     "50 Hz): the wake geometry moves a span in ~0.1 s"),
+    "EnvConfig.throttle_max": (0.8, 2.0, "", "the flight control's throttle ceiling for every UAV: 1 is the Aerosonde's "
+                               "full throttle; above 1 a counterfactual engine (manifold pressure above ambient, the "
+                               "AeroSim engine map extrapolated) for measuring what thrust authority limits; below 0.8 "
+                               "the 25 m/s trim (0.71) has no margin"),
     "RewardWeights.slot": _WEIGHT,
     "RewardWeights.slot_scale_m": (0.1, 1000.0, "m", "Huber knee of the slot error: from a tenth of a metre to "
                                    "the whole formation"),
@@ -305,6 +309,10 @@ class EnvConfig:
         of an nseg-80 lattice, within 0.2 % of its peak, at the nseg-10 cost; needs the load_weighted coupling);
         None (default): the scenario's ("converged" in close_formation and the N-UAV close formations, "lattice"
         elsewhere).
+    throttle_max: the flight control's throttle ceiling for every UAV (1, the default: the Aerosonde's full
+        throttle). Above 1 the engine's manifold pressure passes ambient and the AeroSim engine map is extrapolated:
+        not an aircraft but a counterfactual with more thrust, for measuring what thrust authority limits a
+        controller (docs/close_formation.md, "Ceilings").
     neighbour_count: the other UAVs each agent observes (the ``neighbours`` group): 0 every other UAV in index
         order (6 (V - 1) values: the size grows with the formation); k >= 1 the k whose slots are nearest the
         agent's, nearest first (6 k values whatever the formation's size, so one policy flies an echelon of 3,
@@ -326,6 +334,7 @@ class EnvConfig:
     wake_coupling: str | None = None
     wake_fidelity: str | None = None
     neighbour_count: int | None = None
+    throttle_max: float = 1.0
     reward: RewardWeights = field(default_factory=RewardWeights)
     randomisation: Randomisation = field(default_factory=Randomisation)
 
@@ -364,6 +373,7 @@ class EnvConfig:
             object.__setattr__(self, "duration_s", _in_range("EnvConfig", "duration_s", self.duration_s, low=sc.dt))
         object.__setattr__(self, "wake_update_every",
                            _in_range("EnvConfig", "wake_update_every", self.wake_update_every, integer=True))
+        object.__setattr__(self, "throttle_max", _in_range("EnvConfig", "throttle_max", self.throttle_max))
         if not (self.wake is None or isinstance(self.wake, (bool, np.bool_))):
             raise ValueError(f"EnvConfig: wake must be True, False or None (the scenario's default), got {self.wake!r}")
         if self.wake is not None:

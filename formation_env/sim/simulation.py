@@ -117,7 +117,7 @@ class Simulation:
         # the neighbours each agent observes (0: every other UAV; k: the k nearest by slot)
         self.neighbour_count = sc.neighbour_count if config.neighbour_count is None else config.neighbour_count
         self.trim = trim(sc.airspeed_mps, sc.altitude_m)
-        fc = PIDFlightControl.from_trim(self.trim, dt=sc.dt).config
+        fc = PIDFlightControl.from_trim(self.trim, dt=sc.dt, throttle_limits=(0.0, config.throttle_max)).config
         self.surface_limit_rad = float(fc.surface_limit_rad)
         self.throttle_limits = tuple(float(x) for x in fc.throttle_limits)
         # every wake choice made (coupling; sheet law, span correction, residual table from the wake fidelity)

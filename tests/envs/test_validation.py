@@ -34,6 +34,9 @@ DOCS = Path(__file__).resolve().parents[2] / "docs" / "env.md"
     (lambda v: EnvConfig(collision_separation_b=v), "collision_separation_b", 1e9),
     (lambda v: EnvConfig(wake_update_every=v), "wake_update_every", 10**9),
     (lambda v: EnvConfig(wake_update_every=v), "wake_update_every", 2.0),
+    (lambda v: EnvConfig(throttle_max=v), "throttle_max", 0.5),
+    (lambda v: EnvConfig(throttle_max=v), "throttle_max", float("inf")),
+    (lambda v: EnvConfig(throttle_max=v), "throttle_max", True),
     (lambda v: EnvConfig(duration_s=v), "duration_s", 1e9),
     (lambda v: EnvConfig(duration_s=v), "duration_s", 1e-4),
     (lambda v: EnvConfig(duration_s=v), "duration_s", 10**400),
@@ -67,7 +70,7 @@ def test_nonsense_option_is_a_value_error_naming_option_value_and_range(make, op
 
 def test_every_numeric_option_is_in_the_table_and_the_defaults_inside_it():
     names = {f"{cls.__name__}.{f}" for cls in (RewardWeights, Randomisation) for f in cls.__dataclass_fields__}
-    names |= {f"EnvConfig.{f}" for f in ("control_hz", "collision_separation_b", "duration_s", "wake_update_every")}
+    names |= {f"EnvConfig.{f}" for f in ("control_hz", "collision_separation_b", "duration_s", "wake_update_every", "throttle_max")}
     assert names == set(OPTION_RANGES)
     for cls in (RewardWeights, Randomisation):
         obj = cls()

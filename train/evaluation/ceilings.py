@@ -1,0 +1,226 @@
+"""What limits close-formation station keeping (issue 24): the station keeper flown with what a real controller
+does not have, on the same episodes as the plain keeper.
+
+* **Thrust** (``--throttle-max`` of ``formation-env evaluate``; :class:`formation_env.envs.config.EnvConfig`): the
+  flight control's throttle ceiling raised for every UAV, a counterfactual engine. Any policy flies it.
+* **Decision rate**: the keeper deciding at 25 or 50 Hz instead of 10 (its gains are per second).
+* **Told the disturbance, its own gust** (:func:`wind_preview_keeper`): the keeper's ambient-wind feed-forwards
+  (along-track speed, the vertical gust's angle of attack) read the wind the follower meets ``tau`` s later. The
+  field is frozen and the follower's path differs little from a first pass over the same seeds, so the wind that
+  first pass recorded at decision ``k + tau f`` is that preview.
+* **Told the disturbance, the slot's motion** (:func:`slot_preview_keeper`): the slot is the leader's position
+  plus its offset, and the PID-flown leader's path hardly depends on the follower (its wake on the leader moves it
+  by centimetres: the check reports how far the second pass's leader strays from the first's). The keeper aims across
+  the track at where the slot will be ``tau`` s later: its lateral and vertical slot errors and their rates less the
+  slot's departure from straight flight over ``tau`` (slot frame).
+
+``python -m train.evaluation.ceilings [--episodes N] [--seed S] [--sigma X]`` prints the table
+(docs/close_formation.md, "Ceilings", has the measured one). A preview of 0 s is the plain keeper bit for bit
+(``tests/train/test_ceilings.py``)."""
+
+from __future__ import annotations
+
+import argparse
+import math
+
+import numpy as np
+
+__all__ = ["wind_preview_keeper", "slot_preview_keeper", "ceiling_rows", "main"]
+
+
+def _keeper_policy(name: str, act, reset, control_hz: float = 10.0):
+    from .policy import EvalPolicy
+
+    return EvalPolicy(name, "setpoints", act, control_hz, reset=reset)
+
+
+class _RecordingKeeper:
+    """The station keeper that records each decision's observed ambient wind (slot frame, the observation's slog
+    encoding) and, given ``preview`` (decisions, rows, 3) of a first pass, reads row-wise the one ``shift``
+    decisions later instead of its own."""
+
+    def __init__(self, preview: np.ndarray | None = None, shift: int = 0) -> None:
+        from agents.station_keeper import StationKeeper
+
+        self.keeper = StationKeeper()
+        self.preview, self.shift = preview, int(shift)
+        self.record: list[np.ndarray] = []
+        self.k = 0
+
+    def reset(self, n_rows: int) -> None:
+        self.keeper.reset(n_rows)
+        self.record, self.k = [], 0
+
+    def act(self, obs):
+        from agents.common import observation_groups
+
+        o = np.array(obs, dtype=float)
+        _, groups = observation_groups(o, "wind_preview_keeper")  # views into o
+        self.record.append(np.array(groups["ambient_wind"]))
+        if self.preview is not None and self.shift > 0:
+            groups["ambient_wind"][:] = self.preview[min(self.k + self.shift, len(self.preview) - 1)]
+        self.k += 1
+        return self.keeper.act(o.astype(np.float32))
+
+
+def wind_preview_keeper(config, seeds, tau_s: float) -> list[dict]:
+    """Per-episode metrics (:func:`train.evaluation.episodes.run_episodes`) of the keeper told the ambient wind it
+    meets ``tau_s`` later (a first pass over ``seeds`` records it)."""
+    from .episodes import run_episodes
+
+    first = _RecordingKeeper()
+    run_episodes(_keeper_policy("station_keeper", first.act, first.reset), config, seeds)
+    told = _RecordingKeeper(np.array(first.record), int(round(tau_s * config.control_hz)))
+    return run_episodes(_keeper_policy(f"station_keeper+wind_preview_{tau_s:g}s", told.act, told.reset), config, seeds)
+
+
+class _SlotPath:
+    """Rollout recorder of every follower's slot (its position demand, m NED) at each decision."""
+
+    def __init__(self, vehicle: int = 1) -> None:
+        self.vehicle, self.path = vehicle, []
+
+    def start(self, sim, out) -> None:
+        self.path = []
+
+    def before_step(self, sim, alive, k) -> None:
+        self.path.append(np.array(sim.position_demand[:, self.vehicle]))
+
+    def after_step(self, sim, out, actions, alive, k) -> None:
+        pass
+
+    def ended(self, sim, out, formations, k) -> None:
+        pass
+
+
+class _SlotPreviewKeeper:
+    """The keeper aiming across the track at the slot ``shift`` decisions ahead on the recorded ``path``
+    (decisions, rows, 3; m NED)."""
+
+    def __init__(self, path: np.ndarray, shift: int, control_hz: float) -> None:
+        from agents.station_keeper import StationKeeper
+
+        self.keeper, self.path, self.shift, self.dt = StationKeeper(), path, int(shift), 1.0 / control_hz
+        self.k = 0
+
+    def reset(self, n_rows: int) -> None:
+        self.keeper.reset(n_rows)
+        self.k = 0
+
+    def act(self, obs):
+        from agents.common import observation_groups
+        from agents.pid_formation import inverse_slog
+        from formation_env.envs.observations import POSITION_SCALE_M, VELOCITY_SCALE_MPS, slog
+
+        o = np.array(obs, dtype=float)
+        i, p = self.k, self.path
+        j = min(i + self.shift, len(p) - 1)
+        self.k += 1
+        if j > i:
+            _, groups = observation_groups(o, "slot_preview_keeper")
+            v_now = (p[i] - p[max(i - 1, 0)]) / self.dt
+            v_then = (p[j] - p[max(j - 1, 0)]) / self.dt
+            dev = p[j] - p[i] - (j - i) * self.dt * v_now  # the slot's departure from straight flight, m NED
+            heading = np.arctan2(v_now[:, 1], v_now[:, 0])
+            c, s = np.cos(heading), np.sin(heading)
+
+            def across(x):  # NED -> slot frame, the along-track component left out (the saving hardly needs it)
+                return np.stack([np.zeros_like(c), -s * x[:, 0] + c * x[:, 1], x[:, 2]], axis=1)
+
+            e = inverse_slog(groups["slot_position_error"], POSITION_SCALE_M)
+            de = inverse_slog(groups["slot_velocity_error"], VELOCITY_SCALE_MPS)
+            groups["slot_position_error"][:] = slog(e - across(dev), POSITION_SCALE_M)
+            groups["slot_velocity_error"][:] = slog(de - across(v_then - v_now), VELOCITY_SCALE_MPS)
+        return self.keeper.act(o.astype(np.float32))
+
+
+def slot_preview_keeper(config, seeds, tau_s: float) -> tuple[list[dict], float]:
+    """Per-episode metrics of the keeper aiming at its slot ``tau_s`` ahead (the leader's path recorded on a first
+    pass), and how far (m) the second pass's slot strayed from the first's at most (the preview's accuracy)."""
+    from agents.station_keeper import StationKeeper
+    from formation_env.rollout import rollout
+    from formation_env.sim import Simulation
+
+    from .episodes import run_episodes
+
+    seeds = [int(s) for s in seeds]
+    plain, rec = StationKeeper(), _SlotPath()
+    rollout(Simulation(config, batch_size=len(seeds)), plain, seeds, recorders=[rec])
+    path = np.array(rec.path)
+    told = _SlotPreviewKeeper(path, int(round(tau_s * config.control_hz)), config.control_hz)
+    check = _SlotPath()
+    eps = run_episodes(_keeper_policy(f"station_keeper+slot_preview_{tau_s:g}s", told.act, told.reset), config, seeds)
+    told2 = _SlotPreviewKeeper(path, int(round(tau_s * config.control_hz)), config.control_hz)
+    rollout(Simulation(config, batch_size=len(seeds)), told2, seeds, recorders=[check])
+    n = min(len(check.path), len(path))
+    return eps, float(np.max(np.abs(np.array(check.path[:n]) - path[:n])))
+
+
+def _row(name: str, eps: list[dict], note: str = "") -> dict:
+    g = {k: np.array([e[k] for e in eps], dtype=float) for k in ("harvest_ratio", "rms_lateral_m", "rms_vertical_m",
+                                                                  "rms_along_track_m", "collision")}
+    return {"controller": name, "harvest": float(g["harvest_ratio"].mean()),
+            "rms_lateral_m": float(g["rms_lateral_m"].mean()), "rms_vertical_m": float(g["rms_vertical_m"].mean()),
+            "rms_along_track_m": float(g["rms_along_track_m"].mean()),
+            "surges": int((g["rms_along_track_m"] > 3.0).sum()), "collisions": int(g["collision"].sum()), "note": note}
+
+
+def ceiling_rows(seeds, sigma: float = 1.0, taus=(0.5, 1.0, 2.0), slot_taus=(0.1, 0.2, 0.5), rates=(25.0, 50.0),
+                 throttle_max: float = 1.5) -> list[dict]:
+    """The table's rows (means over the episodes of ``seeds`` at turbulence ``sigma``): the plain keeper, then each
+    ceiling."""
+    from agents.station_keeper import StationKeeper
+
+    from .episodes import eval_env_config, run_episodes
+
+    cfg = eval_env_config("close_formation", "setpoints", turbulence_sigma_mps=sigma, compute_benefit=True)
+    rows = []
+    k = StationKeeper()
+    rows.append(_row("station_keeper", run_episodes(_keeper_policy("station_keeper", k.act, k.reset), cfg, seeds)))
+    k = StationKeeper()
+    hi = eval_env_config("close_formation", "setpoints", turbulence_sigma_mps=sigma, compute_benefit=True,
+                         throttle_max=throttle_max)
+    rows.append(_row(f"throttle ceiling {throttle_max:g}", run_episodes(_keeper_policy("k", k.act, k.reset), hi, seeds),
+                     "every UAV; counterfactual engine"))
+    for hz in rates:
+        k = StationKeeper(control_hz=hz)
+        c = eval_env_config("close_formation", "setpoints", turbulence_sigma_mps=sigma, compute_benefit=True,
+                            control_hz=hz)
+        rows.append(_row(f"decisions at {hz:g} Hz", run_episodes(_keeper_policy("k", k.act, k.reset, hz), c, seeds)))
+    for tau in taus:
+        rows.append(_row(f"told its gust {tau:g} s ahead", wind_preview_keeper(cfg, seeds, tau)))
+    for tau in slot_taus:
+        eps, stray = slot_preview_keeper(cfg, seeds, tau)
+        rows.append(_row(f"told its slot {tau:g} s ahead", eps, f"leader path within {stray:.2f} m of the first pass"))
+    return rows
+
+
+def _table(rows: list[dict]) -> str:
+    head = ("| controller | harvest | lateral RMS m | vertical RMS m | along RMS m | surges (along > 3 m) | collisions | note |\n"
+            "|---|---|---|---|---|---|---|---|\n")
+    return head + "".join(f"| {r['controller']} | {r['harvest']:.3f} | {r['rms_lateral_m']:.3f} | {r['rms_vertical_m']:.3f} | "
+                          f"{r['rms_along_track_m']:.2f} | {r['surges']} | {r['collisions']} | {r['note']} |\n" for r in rows)
+
+
+def main(argv=None) -> int:
+    from train.config import TEST_SEED_BASE
+
+    p = argparse.ArgumentParser(prog="python -m train.evaluation.ceilings", description=__doc__.split("\n\n")[0])
+    p.add_argument("--episodes", type=int, default=100, help="episodes, 1..1000 (default 100)")
+    p.add_argument("--seed", type=int, default=TEST_SEED_BASE, help="the first of --episodes consecutive seeds")
+    p.add_argument("--sigma", type=float, default=1.0, help="turbulence sigma, m/s, 0..3 (default 1)")
+    args = p.parse_args(argv)
+    if not 1 <= args.episodes <= 1000:
+        p.error(f"--episodes must be in 1..1000, got {args.episodes}")
+    if not (math.isfinite(args.sigma) and 0.0 <= args.sigma <= 3.0):
+        p.error(f"--sigma must be in [0, 3] m/s, got {args.sigma}")
+    if args.seed < 0:
+        p.error(f"--seed must be >= 0, got {args.seed}")
+    rows = ceiling_rows(list(range(args.seed, args.seed + args.episodes)), sigma=args.sigma)
+    print(f"close_formation, {args.episodes} episodes from seed {args.seed}, sigma {args.sigma:g} m/s\n")
+    print(_table(rows))
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
