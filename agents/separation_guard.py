@@ -85,17 +85,26 @@ class GuardGains:
     lateral_m: float = 2.0  # m the target moves away across the track at full depth
     vertical_m: float = 1.0  # m the target moves down at full depth
     k_speed: float = 1.5  # m/s of speed demand taken off per m of depth
+    # from this ramp on (0: never) the lateral set-point is never nearer the guarded UAV than the guard's own shift:
+    # what the policy adds toward it is clipped away (filter only; the keeper steers to the shifted target itself).
+    # 0.25 is depth >= 2.5 m, i.e. more than 3.3 m ahead of a close_formation slot (docs/close_formation.md, "The
+    # guard as a clip")
+    clip_ramp: float = 0.0
 
     def __post_init__(self) -> None:
         check_gains(self)
         if self.guard_m <= 0:
             raise ValueError(f"GuardGains.guard_m must be > 0, got {self.guard_m!r}")
+        if self.clip_ramp > 1:
+            raise ValueError(f"GuardGains.clip_ramp must be in [0, 1] (0: no clip; the ramp is at most 1), got "
+                             f"{self.clip_ramp!r}")
 
 
 class SeparationGuard:
     """``filter(obs (N, D), actions (N, 4)) -> (N, 4)``: ``setpoints`` actions (the +-5 m position and +-2 m/s speed
-    ranges of a scenario without a safe box) with the guard's shift added; stateless, so one instance serves every
-    row and episode. Rows outside the guard zone pass through unchanged (bit for bit)."""
+    ranges of a scenario without a safe box) with the guard's shift added (and, with ``clip_ramp`` > 0, the lateral
+    set-point clipped to the far side of the shift deep in the guard); stateless, so one instance serves every row
+    and episode. Rows outside the guard zone pass through unchanged (bit for bit)."""
 
     action_mode = "setpoints"
 
@@ -127,5 +136,12 @@ class SeparationGuard:
         a[:, 1] += dy / SETPOINT_POSITION_SCALE_M
         a[:, 2] += dz / SETPOINT_POSITION_SCALE_M
         a[:, 3] = dv / SETPOINT_SPEED_SCALE_MPS
+        if g.clip_ramp > 0:
+            # deep in the guard the lateral set-point stays on the far side of the shift: an overtaking policy
+            # commanding toward the UAV it passes (out of its training distribution: ahead of the leader, throttle
+            # closed) cannot undo the shift (the collisions of the additive guard at sigma 1.5)
+            on = ramp[active] >= g.clip_ramp
+            sd = side[active]
+            a[:, 1] = np.where(on, sd * np.maximum(sd * a[:, 1], np.abs(dy) / SETPOINT_POSITION_SCALE_M), a[:, 1])
         out[active] = np.clip(a, -1.0, 1.0)
         return out.astype(act.dtype, copy=False)

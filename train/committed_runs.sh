@@ -53,7 +53,9 @@ for scenario in formation_keeping close_formation reconfiguration wake_surfing w
   for seed in 0 1 2; do
     run="$RUNS/${scenario}_seed${seed}"
     wall=$("$PY" -c "import json,sys; print(json.load(open(sys.argv[1]))['wall_s'])" "$run/summary.json")
-    "$PY" -m train.publish "$run" "${scenario}_ppo_setpoints_seed${seed}" --wall-s "$wall"
+    guard=()  # close_formation's policies fly through the guard's lateral clip (docs/close_formation.md)
+    if [ "$scenario" = close_formation ]; then guard=(--guard '{"clip_ramp": 0.25}'); fi
+    "$PY" -m train.publish "$run" "${scenario}_ppo_setpoints_seed${seed}" --wall-s "$wall" ${guard[@]+"${guard[@]}"}
   done
 done
 # MAPPO: a run none of whose validations was free of collisions has no best model; its final model is published

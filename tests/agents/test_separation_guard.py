@@ -62,6 +62,33 @@ def test_inside_the_zone_the_target_moves_away_and_down_and_the_speed_drops():
     assert beside[3] == -1.0 and beside[0] == -1.0
 
 
+def test_the_clip_keeps_the_lateral_set_point_beyond_the_shift_deep_in_the_guard():
+    """With ``clip_ramp`` the policy's lateral command toward the guarded UAV is clipped to the guard's shift once the
+    ramp reaches it; away from the UAV, shallower in the guard, and on every other axis the additive guard's action."""
+    g = GuardGains(clip_ramp=0.25)
+    add, clip = SeparationGuard(), SeparationGuard(g)
+    rng = np.random.default_rng(2)
+    for ahead in (4.0, 2.0, 0.0, -3.0):  # ramp 0.04, 0.36, 1, 1 (the leader to port: the shift is starboard)
+        for lateral in (-2.8, 2.8):
+            obs = np.repeat(_overtaking(ahead, lateral), 16, axis=0)
+            a = rng.uniform(-1, 1, size=(16, 4))
+            ref, out = add.filter(obs, a), clip.filter(obs, a)
+            np.testing.assert_array_equal(out[:, [0, 2, 3]], ref[:, [0, 2, 3]])
+            ramp = min((g.guard_m - ahead) / g.guard_m, 1.0) ** 2
+            side = 1.0 if lateral < 0 else -1.0
+            shift = g.lateral_m * ramp / 5.0
+            if ramp < g.clip_ramp:
+                np.testing.assert_array_equal(out, ref)
+            else:
+                assert np.all(side * out[:, 1] >= shift - 1e-12)  # never nearer than the shift
+                away = side * ref[:, 1] >= shift
+                np.testing.assert_array_equal(out[away], ref[away])  # commands away from the UAV untouched
+                assert np.all(out[~away, 1] == pytest.approx(side * shift))
+    np.testing.assert_array_equal(SeparationGuard(GuardGains(clip_ramp=0.0)).filter(obs, a), add.filter(obs, a))
+    with pytest.raises(ValueError, match="clip_ramp must be in"):
+        GuardGains(clip_ramp=1.5)
+
+
 def test_bounded_and_nan_rows_pass():
     rng = np.random.default_rng(1)
     obs = rng.normal(0.0, 2.0, size=(64, observation_size(2)))

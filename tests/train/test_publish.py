@@ -137,3 +137,32 @@ def test_publish_best_or_final_model(tmp_path, monkeypatch):
     assert meta["num_timesteps"] == 200 and meta["validation"]["num_timesteps"] == 200 and meta["note"]
     with pytest.raises(ValueError, match="model"):
         publish.publish(run, "c_seed3", model="last")
+
+
+def test_publish_names_the_guard_the_policy_flies_with(tmp_path, monkeypatch):
+    """``guard`` puts the separation guard's gains into the sidecar of a run trained with the guard; a run without
+    the guard, an unknown gain or a bad value is refused before anything is written."""
+    import yaml
+
+    out = tmp_path / "policies"
+    out.mkdir()
+    monkeypatch.setattr(publish, "POLICIES", out)
+    for guarded in (True, False):
+        run = tmp_path / f"run{guarded}"
+        run.mkdir()
+        (run / "config.yaml").write_text(yaml.safe_dump({"command": "cmd", "config": {"seed": 0}}))
+        env = {"algo": "ppo", "scenario": "close_formation", "action_mode": "setpoints", "control_hz": 10.0,
+               **({"action_guard": True} if guarded else {})}
+        (run / "best_model.json").write_text(json.dumps({**env, "num_timesteps": 100, "validation": {"score": -0.5}}))
+        for name, body in (("best_model.zip", b"best"), ("curve.csv", b"s\n"), ("evaluations.json", b"[]")):
+            (run / name).write_bytes(body)
+    publish.publish(tmp_path / "runTrue", "g_seed0", guard={"clip_ramp": 0.25})
+    assert json.loads((out / "g_seed0.json").read_text())["env"]["action_guard"] == {"clip_ramp": 0.25}
+    publish.publish(tmp_path / "runTrue", "h_seed0")
+    assert json.loads((out / "h_seed0.json").read_text())["env"]["action_guard"] is True
+    for run, guard, match in (("runFalse", {"clip_ramp": 0.25}, "trained without the separation guard"),
+                              ("runTrue", {"clip": 0.25}, "unknown separation-guard gain"),
+                              ("runTrue", {"clip_ramp": 2.0}, "clip_ramp must be in")):
+        with pytest.raises(ValueError, match=match):
+            publish.publish(tmp_path / run, "x_seed0", guard=guard)
+    assert not (out / "x_seed0.json").exists()

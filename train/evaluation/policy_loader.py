@@ -57,7 +57,8 @@ def policy_metadata(path: Path) -> dict:
             data = data.get("config", data)  # a run's config.yaml: {"command", "config": TrainConfig fields}
             return {"algo": data.get("algo"), "action_mode": data.get("action_mode"), "scenario": data.get("scenario"),
                     "control_hz": (data.get("env_kwargs") or {}).get("control_hz", 10.0),
-                    "action_guard": bool(data.get("action_guard", False))}
+                    "action_guard": (data.get("action_guard") if isinstance(data.get("action_guard"), dict)
+                                     else bool(data.get("action_guard", False)))}
     return {}
 
 
@@ -117,5 +118,9 @@ def load_policy(spec: str, *, action_mode: str | None = None, name: str | None =
                              f"actions, but it is flown with {mode!r} actions")
         from ..sb3.guard import guarded
 
-        act = guarded(act)
+        spec_gains = meta["action_guard"] if isinstance(meta["action_guard"], dict) else None
+        try:
+            act = guarded(act, spec_gains)
+        except ValueError as exc:
+            raise ValueError(f"policy {spec!r}: its metadata's action_guard: {exc}") from None
     return EvalPolicy(name or path.stem, mode, act, float(meta.get("control_hz", 10.0) or 10.0), str(path))

@@ -23,20 +23,31 @@ POLICIES = Path(__file__).resolve().parents[1] / "policies"
 
 
 def publish(run_dir: str | Path, name: str, *, eval_json: str | Path | None = None, wall_s: float | None = None,
-            stopped_at: int | None = None, note: str | None = None, model: str = "best") -> Path:
+            stopped_at: int | None = None, note: str | None = None, model: str = "best", guard: dict | None = None) -> Path:
     """``model`` "best" (the validation's choice) or "final" (the last model, with the last validation: for a run
-    none of whose validations was free of collisions, where the selection rule has no best; say so in ``note``)."""
+    none of whose validations was free of collisions, where the selection rule has no best; say so in ``note``).
+    ``guard``: the separation guard's gains the published policy flies with (its sidecar's ``env.action_guard``, e.g.
+    ``{"clip_ramp": 0.25}``) instead of the run's own guard (a run trained with the guard in the loop only)."""
     if model not in ("best", "final"):
         raise ValueError(f"publish: model must be 'best' or 'final', got {model!r}")
+    if guard is not None:
+        from ..sb3.guard import guard_gains
+
+        guard_gains(guard)  # unknown gains or bad values fail before anything is written
     run = Path(run_dir)
     cfg = yaml.safe_load((run / "config.yaml").read_text())
     best = json.loads((run / f"{model}_model.json").read_text())
     if model == "final":
         best["validation"] = json.loads((run / "evaluations.json").read_text())[-1]
     c = cfg["config"]
+    if guard is not None:
+        if not best.get("action_guard"):
+            raise ValueError(f"publish: {run} was trained without the separation guard; a guard for its policy is a new "
+                             "policy, train it with action_guard instead")
+        best["action_guard"] = guard
     meta = {
         "env": {**{k: best[k] for k in ("algo", "scenario", "action_mode", "control_hz")},
-                **({"action_guard": True} if best.get("action_guard") else {})},
+                **({"action_guard": best["action_guard"]} if best.get("action_guard") else {})},
         "command": cfg.get("command"),
         "seed": c["seed"],
         "num_timesteps": best["num_timesteps"],
@@ -100,10 +111,19 @@ def main() -> int:
     ap.add_argument("--stopped-at", type=int, default=None)
     ap.add_argument("--note", default=None)
     ap.add_argument("--model", choices=("best", "final"), default="best")
+    ap.add_argument("--guard", default=None, metavar="JSON",
+                    help="the separation guard's gains the published policy flies with, e.g. '{\"clip_ramp\": 0.25}' "
+                         "(a run trained with the guard in the loop only)")
     a = ap.parse_args()
     try:
+        guard = None
+        if a.guard is not None:
+            try:
+                guard = json.loads(a.guard)
+            except json.JSONDecodeError as exc:
+                raise ValueError(f"--guard must be a JSON object of GuardGains fields, got {a.guard!r} ({exc})") from None
         print(publish(a.run_dir, a.name, eval_json=a.eval, wall_s=a.wall_s, stopped_at=a.stopped_at, note=a.note,
-                      model=a.model))
+                      model=a.model, guard=guard))
     except FileExistsError as e:
         print(f"error: {a.name} is already published ({e.filename or e}); remove its files first", file=sys.stderr)
         return 2

@@ -88,7 +88,7 @@ def build_callbacks(cfg: TrainConfig, run_dir: Path, state: dict, log: Callable[
             if cfg.action_guard:
                 from .guard import guarded
 
-                act = guarded(act)
+                act = guarded(act, cfg.action_guard)
             summ = summarise(run_episodes(FunctionPolicy(act), self.config, self.seeds))
             score = selection_score(summ)
             entry = {"num_timesteps": int(self.num_timesteps), "score": score, **summ}

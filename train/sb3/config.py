@@ -228,7 +228,7 @@ class TrainConfig:
     init_policy: str | None = None
     # the separation guard (agents.separation_guard) filters the policy's set-point actions in training, in
     # validation and wherever the published policy is evaluated (its sidecar says so): part of the policy
-    action_guard: bool = False
+    action_guard: bool | dict = False
 
     def __post_init__(self) -> None:
         from formation_env.scenarios import scenario_names
@@ -269,8 +269,15 @@ class TrainConfig:
         if isinstance(self.reward_scale, bool) or not isinstance(self.reward_scale, (int, float)) \
                 or not math.isfinite(self.reward_scale) or not 0 < self.reward_scale <= 1e3:
             raise ValueError(f"reward_scale must be a finite number > 0 (and <= 1000), got {self.reward_scale!r}")
-        if not isinstance(self.action_guard, bool):
-            raise ValueError(f"action_guard must be true or false, got {self.action_guard!r}")
+        if isinstance(self.action_guard, dict):  # the guard with these GuardGains (e.g. {clip_ramp: 0.25})
+            from .guard import guard_gains
+
+            if not self.action_guard:
+                raise ValueError("action_guard: an empty mapping; give true for the guard's default gains")
+            guard_gains(self.action_guard)
+        elif not isinstance(self.action_guard, bool):
+            raise ValueError(f"action_guard must be true, false or a mapping of separation-guard gains (e.g. "
+                             f"{{clip_ramp: 0.25}}), got {self.action_guard!r}")
         if self.action_guard and self.action_mode != "setpoints":
             raise ValueError(f"action_guard filters set-point actions; action mode {self.action_mode!r} has none "
                              "(use --action-mode setpoints or action_guard: false)")

@@ -8,14 +8,32 @@ from __future__ import annotations
 import numpy as np
 from stable_baselines3.common.vec_env import VecEnvWrapper
 
-__all__ = ["GuardedVecEnv", "guarded"]
+__all__ = ["GuardedVecEnv", "guard_gains", "guarded"]
 
 
-def guarded(act):
-    """``act(obs) -> actions`` followed by the separation guard (the evaluation's and the validation's policy)."""
+def guard_gains(spec):
+    """The :class:`agents.separation_guard.GuardGains` of an ``action_guard`` setting (a run's or a sidecar's): True
+    (or None) the defaults, a dict their overrides (e.g. ``{"clip_ramp": 0.25}``); a ValueError naming an unknown
+    gain or a bad value."""
+    from agents.separation_guard import GuardGains
+
+    if spec is None or spec is True:
+        return GuardGains()
+    if not isinstance(spec, dict):
+        raise ValueError(f"the separation guard's gains must be a dict of GuardGains fields, got {spec!r}")
+    known = set(GuardGains.__dataclass_fields__)
+    unknown = sorted(set(spec) - known)
+    if unknown:
+        raise ValueError(f"unknown separation-guard gain(s) {unknown}; GuardGains has {sorted(known)}")
+    return GuardGains(**spec)
+
+
+def guarded(act, gains=None):
+    """``act(obs) -> actions`` followed by the separation guard (the evaluation's and the validation's policy);
+    ``gains``: an ``action_guard`` setting (:func:`guard_gains`: None or True for the defaults, or a dict)."""
     from agents.separation_guard import SeparationGuard
 
-    guard = SeparationGuard()
+    guard = SeparationGuard(guard_gains(gains))
     return lambda obs: guard.filter(obs, act(obs))
 
 
@@ -24,11 +42,11 @@ class GuardedVecEnv(VecEnvWrapper):
     its observations) whose actions pass through the separation guard, judged on the last observations (after an
     episode's end the next episode's first: the VecEnv resets automatically)."""
 
-    def __init__(self, venv) -> None:
+    def __init__(self, venv, gains=None) -> None:
         from agents.separation_guard import SeparationGuard
 
         super().__init__(venv)
-        self.guard = SeparationGuard()
+        self.guard = SeparationGuard(guard_gains(gains))
         self._obs: np.ndarray | None = None
 
     def reset(self):

@@ -54,7 +54,7 @@ def run_metadata(cfg: TrainConfig, steps: int, extra: dict | None = None) -> dic
     d = {"algo": cfg.algo, "scenario": cfg.scenario, "action_mode": cfg.action_mode, "control_hz": env.control_hz,
          "seed": cfg.seed, "num_timesteps": int(steps)}
     if cfg.action_guard:
-        d["action_guard"] = True
+        d["action_guard"] = cfg.action_guard  # True, or the guard's gains
     if extra:
         d.update(extra)
     return d

@@ -110,7 +110,7 @@ def make_train_env(cfg: TrainConfig, seed: int):
     if cfg.action_guard:  # the separation guard filters the policy's set-points (inside MAPPO's global state)
         from .guard import GuardedVecEnv
 
-        env = GuardedVecEnv(env)
+        env = GuardedVecEnv(env, cfg.action_guard)
     if cfg.policy == "CentralCriticPolicy":  # MAPPO: every row gets its formation's agent-specific global state
         from .central_critic import GlobalStateVecEnv
 
