@@ -142,7 +142,7 @@ def run(args) -> int:
     if agg.get("scores"):
         print("aggregates over training seeds x episodes (rliable, 95 % stratified bootstrap):\n"
               + rep.get("aggregates_markdown", ""))
-    files = ["results.json", "results.md"] + (["marl_eval.json"] if agg else [])
+    files = ["results.json", "results.md"] + (["marl_eval.json"] if agg and "marl_eval" not in rep else [])
     if not args.no_plots:
         files += ["metrics.png", "slot_error.png"] + (["performance_profile.png"] if agg.get("scores") else [])
     print(f"wrote {out}/" + ", ".join(files))

@@ -24,8 +24,9 @@ def tiny():
 
 @pytest.fixture
 def seeded_candidates(monkeypatch):
-    """``seeded_candidates(step)``: ``load_policy('cand_seed<k>')`` gives the PID plus a constant throttle
-    residual of ``step * k`` (a different controller per seed); every other spec loads as usual."""
+    """``seeded_candidates(step)``: ``load_policy('cand_seed<k>')`` (or another group's ``cand<x>_seed<k>``) gives the
+    PID plus a constant throttle residual of ``step * k`` (a different controller per seed); every other spec loads as
+    usual."""
     import numpy as np
 
     import train.evaluation.evaluate as ev
@@ -35,8 +36,8 @@ def seeded_candidates(monkeypatch):
 
     def install(step):
         def load(spec, **kw):
-            if spec.startswith("cand_seed"):
-                k = int(spec[len("cand_seed"):])
+            if spec.startswith("cand") and "_seed" in spec:  # cand_seed<k>, or another group: candb_seed<k>
+                k = int(spec.rsplit("_seed", 1)[1])
                 return EvalPolicy(spec, "residual", lambda o: np.tile([0.0, 0.0, 0.0, step * k], (o.shape[0], 1)))
             return real(spec, **kw)
 

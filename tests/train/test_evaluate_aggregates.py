@@ -50,6 +50,24 @@ def test_cli_evaluate_three_seeds_reports_rliable_aggregates(tmp_path, capsys, t
     assert set(m) == {"cand", "pid"} and list(m["cand"]) == ["seed_0", "seed_1", "seed_2"] and len(m["pid"]) == 3
 
 
+def test_seed_groups_of_different_sizes_evaluate_every_level_without_marl_eval(tmp_path, capsys, three_seeds):
+    """marl-eval's format needs as many runs in every group: with 3 seeds of one recipe and 2 of another the
+    evaluation still writes every level (no marl_eval.json, a note instead), where it used to stop after the first."""
+    out = tmp_path / "ev"
+    argv = ["evaluate", "--scenario", "formation_keeping", "--episodes", "2", "--duration", "1", "--seeds", "7",
+            "--bootstrap-resamples", "100", "--no-plots", "--turbulence", "0", "1", "--out", str(out)]
+    for p in ("cand_seed0", "cand_seed1", "cand_seed2", "candb_seed0", "candb_seed1", "pid"):
+        argv += ["--policy", p]
+    assert main(argv) == 0
+    printed = capsys.readouterr().out
+    assert "marl_eval.json not written" in printed and "[2, 3]" in printed
+    for level in ("sigma_0", "sigma_1"):
+        rep = json.loads((out / level / "results.json").read_text())
+        assert "the seed groups have [2, 3]" in rep["marl_eval"]
+        assert not (out / level / "marl_eval.json").exists()
+        assert rep["aggregates"]["scores"]["rms_slot_error_m"]["policies"]["candb"]["runs"] == 2
+
+
 @pytest.mark.parametrize("task", ["formation_keeping", "reconfiguration", "wake_surfing"])
 def test_committed_records_recompute_to_their_intervals(task):
     """The library estimators on the stored per-episode data give the committed intervals: SciPy draws

@@ -227,6 +227,13 @@ def evaluate(policies: Sequence[str], *, scenario: str, episodes: int = TEST_EPI
     report["groups_markdown"] = groups_table(group_reports)
     report["aggregates"] = _aggregates(episodes_by_name, group_spec, list(baselines.values()), n_boot, log)
     report["aggregates_markdown"] = aggregates_table(report["aggregates"])
+    multi = {g: m for g, m in group_spec.items() if len(m) >= 2}
+    sizes = sorted({len(m) for m in multi.values()})
+    if out is not None and len(sizes) > 1:  # marl-eval's format cannot hold them; the evaluation stands (levels go on)
+        report["marl_eval"] = (f"marl_eval.json not written: marl-eval needs the same number of runs for every "
+                               f"algorithm, the seed groups have {sizes} ({', '.join(sorted(multi))})")
+        if log:
+            log(report["marl_eval"])
     if out is not None:
         from formation_env.io import atomic_write_json, atomic_write_text
 
@@ -253,8 +260,7 @@ def evaluate(policies: Sequence[str], *, scenario: str, episodes: int = TEST_EPI
             text += ("\n## Aggregates over training seeds and episodes (rliable; stratified bootstrap, 95 %)\n\n"
                      + report["aggregates_markdown"])
         atomic_write_text(out / "results.md", text, overwrite=overwrite)
-        multi = {g: m for g, m in group_spec.items() if len(m) >= 2}
-        if multi:
+        if multi and "marl_eval" not in report:
             write_marl_eval(out / "marl_eval.json", marl_eval_data(
                 scenario, episodes_by_name, multi, list(baselines.values()),
                 step_counts={n: training_steps(r["policy"]) for n, r in results.items()}), overwrite=overwrite)

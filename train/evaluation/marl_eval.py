@@ -16,7 +16,8 @@ the evaluation, team-level (averaged over the learning UAVs), lower case, boolea
 marl-eval requires the same number of runs for every algorithm of an environment: a deterministic
 baseline controller (one run) is written as that many identical runs (``seed_0`` ..), which leaves any
 bootstrap over runs unchanged for it. Groups with different numbers of seeds cannot share one file
-(ValueError). marl-eval itself is not a dependency (its 0.0.4 sdist pins pandas 1.4.4 and does not
+(ValueError here; ``formation-env evaluate`` then writes no marl_eval.json and says so in results.json's
+``marl_eval``, and evaluates every level as usual). marl-eval itself is not a dependency (its 0.0.4 sdist pins pandas 1.4.4 and does not
 build here); the format is tested on fixed inputs (tests/train/test_marl_eval_export.py).
 """
 
