@@ -38,6 +38,8 @@ CASES: list[tuple[list[str], str]] = [
     (["run", "--scenario", "tracking", "--out", FILE], "afile"),
     (["run", "--scenario", "tracking", "--out", FILE + "/sub"], "afile"),
     (["evaluate", "--policy", "pid", "--scenario", "close_formation", "--wake-fidelity", "fine"], "'fine'"),
+    (["evaluate", "--policy", "pid", "--scenario", "close_formation", "--throttle-max", "5"], "throttle_max must be in [0.8, 2]"),
+    (["evaluate", "--policy", "pid", "--scenario", "close_formation", "--throttle-max", "nan"], "got nan"),
     # replay
     (["replay", "--scenario", "tracking", "--gif", "--max-frames", "0"], "'0'"),
     (["replay", "--scenario", "tracking", "--gif", "--max-frames", "-3"], "'-3'"),

@@ -22,10 +22,11 @@ from __future__ import annotations
 
 import argparse
 import math
+from typing import NamedTuple
 
 import numpy as np
 
-__all__ = ["wind_preview_keeper", "slot_preview_keeper", "ceiling_rows", "main"]
+__all__ = ["FirstPass", "first_pass", "wind_preview_keeper", "slot_preview_keeper", "ceiling_rows", "main"]
 
 
 def _keeper_policy(name: str, act, reset, control_hz: float = 10.0):
@@ -63,14 +64,32 @@ class _RecordingKeeper:
         return self.keeper.act(o.astype(np.float32))
 
 
-def wind_preview_keeper(config, seeds, tau_s: float) -> list[dict]:
-    """Per-episode metrics (:func:`train.evaluation.episodes.run_episodes`) of the keeper told the ambient wind it
-    meets ``tau_s`` later (a first pass over ``seeds`` records it)."""
+class FirstPass(NamedTuple):
+    """The plain keeper's pass over the episodes, which every preview reads: its per-episode metrics, the ambient wind
+    it observed at each decision (decisions, rows, 3; the observation's encoding) and its slot's path (decisions,
+    rows, 3; m NED)."""
+
+    episodes: list
+    wind: np.ndarray
+    slot_path: np.ndarray
+
+
+def first_pass(config, seeds) -> FirstPass:
+    """The plain station keeper over ``seeds``, recording what the previews need (one pass for every ceiling)."""
     from .episodes import run_episodes
 
-    first = _RecordingKeeper()
-    run_episodes(_keeper_policy("station_keeper", first.act, first.reset), config, seeds)
-    told = _RecordingKeeper(np.array(first.record), int(round(tau_s * config.control_hz)))
+    keeper, path = _RecordingKeeper(), _SlotPath()
+    eps = run_episodes(_keeper_policy("station_keeper", keeper.act, keeper.reset), config, seeds, recorders=[path])
+    return FirstPass(eps, np.array(keeper.record), np.array(path.path))
+
+
+def wind_preview_keeper(config, seeds, tau_s: float, first: FirstPass | None = None) -> list[dict]:
+    """Per-episode metrics (:func:`train.evaluation.episodes.run_episodes`) of the keeper told the ambient wind it
+    meets ``tau_s`` later (``first``: the plain pass over the same ``seeds``, flown here when None)."""
+    from .episodes import run_episodes
+
+    first = first_pass(config, seeds) if first is None else first
+    told = _RecordingKeeper(first.wind, int(round(tau_s * config.control_hz)))
     return run_episodes(_keeper_policy(f"station_keeper+wind_preview_{tau_s:g}s", told.act, told.reset), config, seeds)
 
 
@@ -111,6 +130,7 @@ class _SlotPreviewKeeper:
         from agents.common import observation_groups
         from agents.pid_formation import inverse_slog
         from formation_env.envs.observations import POSITION_SCALE_M, VELOCITY_SCALE_MPS, slog
+        from formation_env.frames import ned_to_track_frame
 
         o = np.array(obs, dtype=float)
         i, p = self.k, self.path
@@ -122,10 +142,9 @@ class _SlotPreviewKeeper:
             v_then = (p[j] - p[max(j - 1, 0)]) / self.dt
             dev = p[j] - p[i] - (j - i) * self.dt * v_now  # the slot's departure from straight flight, m NED
             heading = np.arctan2(v_now[:, 1], v_now[:, 0])
-            c, s = np.cos(heading), np.sin(heading)
 
             def across(x):  # NED -> slot frame, the along-track component left out (the saving hardly needs it)
-                return np.stack([np.zeros_like(c), -s * x[:, 0] + c * x[:, 1], x[:, 2]], axis=1)
+                return ned_to_track_frame(x, heading) * np.array([0.0, 1.0, 1.0])
 
             e = inverse_slog(groups["slot_position_error"], POSITION_SCALE_M)
             de = inverse_slog(groups["slot_velocity_error"], VELOCITY_SCALE_MPS)
@@ -134,26 +153,18 @@ class _SlotPreviewKeeper:
         return self.keeper.act(o.astype(np.float32))
 
 
-def slot_preview_keeper(config, seeds, tau_s: float) -> tuple[list[dict], float]:
-    """Per-episode metrics of the keeper aiming at its slot ``tau_s`` ahead (the leader's path recorded on a first
-    pass), and how far (m) the second pass's slot strayed from the first's at most (the preview's accuracy)."""
-    from agents.station_keeper import StationKeeper
-    from formation_env.rollout import rollout
-    from formation_env.sim import Simulation
-
+def slot_preview_keeper(config, seeds, tau_s: float, first: FirstPass | None = None) -> tuple[list[dict], float]:
+    """Per-episode metrics of the keeper aiming at its slot ``tau_s`` ahead on the path of ``first`` (the plain pass
+    over the same ``seeds``, flown here when None), and how far (m) this pass's slot strayed from that path at most
+    (the preview's accuracy)."""
     from .episodes import run_episodes
 
-    seeds = [int(s) for s in seeds]
-    plain, rec = StationKeeper(), _SlotPath()
-    rollout(Simulation(config, batch_size=len(seeds)), plain, seeds, recorders=[rec])
-    path = np.array(rec.path)
-    told = _SlotPreviewKeeper(path, int(round(tau_s * config.control_hz)), config.control_hz)
-    check = _SlotPath()
-    eps = run_episodes(_keeper_policy(f"station_keeper+slot_preview_{tau_s:g}s", told.act, told.reset), config, seeds)
-    told2 = _SlotPreviewKeeper(path, int(round(tau_s * config.control_hz)), config.control_hz)
-    rollout(Simulation(config, batch_size=len(seeds)), told2, seeds, recorders=[check])
-    n = min(len(check.path), len(path))
-    return eps, float(np.max(np.abs(np.array(check.path[:n]) - path[:n])))
+    first = first_pass(config, seeds) if first is None else first
+    told, path = _SlotPreviewKeeper(first.slot_path, int(round(tau_s * config.control_hz)), config.control_hz), _SlotPath()
+    eps = run_episodes(_keeper_policy(f"station_keeper+slot_preview_{tau_s:g}s", told.act, told.reset), config, seeds,
+                       recorders=[path])
+    n = min(len(path.path), len(first.slot_path))
+    return eps, float(np.max(np.abs(np.array(path.path[:n]) - first.slot_path[:n])))
 
 
 def _row(name: str, eps: list[dict], note: str = "") -> dict:
@@ -174,9 +185,8 @@ def ceiling_rows(seeds, sigma: float = 1.0, taus=(0.5, 1.0, 2.0), slot_taus=(0.1
     from .episodes import eval_env_config, run_episodes
 
     cfg = eval_env_config("close_formation", "setpoints", turbulence_sigma_mps=sigma, compute_benefit=True)
-    rows = []
-    k = StationKeeper()
-    rows.append(_row("station_keeper", run_episodes(_keeper_policy("station_keeper", k.act, k.reset), cfg, seeds)))
+    first = first_pass(cfg, seeds)  # the plain keeper's row, and what every preview reads
+    rows = [_row("station_keeper", first.episodes)]
     k = StationKeeper()
     hi = eval_env_config("close_formation", "setpoints", turbulence_sigma_mps=sigma, compute_benefit=True,
                          throttle_max=throttle_max)
@@ -188,9 +198,9 @@ def ceiling_rows(seeds, sigma: float = 1.0, taus=(0.5, 1.0, 2.0), slot_taus=(0.1
                             control_hz=hz)
         rows.append(_row(f"decisions at {hz:g} Hz", run_episodes(_keeper_policy("k", k.act, k.reset, hz), c, seeds)))
     for tau in taus:
-        rows.append(_row(f"told its gust {tau:g} s ahead", wind_preview_keeper(cfg, seeds, tau)))
+        rows.append(_row(f"told its gust {tau:g} s ahead", wind_preview_keeper(cfg, seeds, tau, first)))
     for tau in slot_taus:
-        eps, stray = slot_preview_keeper(cfg, seeds, tau)
+        eps, stray = slot_preview_keeper(cfg, seeds, tau, first)
         rows.append(_row(f"told its slot {tau:g} s ahead", eps, f"leader path within {stray:.2f} m of the first pass"))
     return rows
 

@@ -159,9 +159,10 @@ class _EpisodeSeries(Recorder):
         self.fuel_end[formations] = sim.aircraft[formations, :, 13]
 
 
-def run_episodes(policy, config, seeds: Sequence[int], *, keep_series: bool = False) -> list[dict]:
+def run_episodes(policy, config, seeds: Sequence[int], *, keep_series: bool = False, recorders: Sequence = ()) -> list[dict]:
     """Fly one episode per seed (all in one batch) with ``policy`` (the :class:`formation_env.rollout.Policy`
-    protocol) and return the per-episode metrics (the module's table)."""
+    protocol) and return the per-episode metrics (the module's table); ``recorders``: more
+    :class:`formation_env.rollout.Recorder` s to see the same rollout."""
     from formation_env.rollout import rollout
     from formation_env.sim import Simulation
 
@@ -170,7 +171,7 @@ def run_episodes(policy, config, seeds: Sequence[int], *, keep_series: bool = Fa
         raise ValueError("seeds must not be empty")
     sim = Simulation(config, batch_size=len(seeds))
     rec = _EpisodeSeries(config)
-    res = rollout(sim, policy, seeds, recorders=[rec])
+    res = rollout(sim, policy, seeds, recorders=[rec, *recorders])
     sc, agents = sim.scenario, rec.agents
     b, a_n = rec.shape
     has_box = sc.safe_box_b is not None

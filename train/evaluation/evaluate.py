@@ -125,9 +125,9 @@ def evaluate(policies: Sequence[str], *, scenario: str, episodes: int = TEST_EPI
     if duration_s is not None and not (isinstance(duration_s, (int, float)) and math.isfinite(duration_s)
                                        and 0 < duration_s <= MAX_DURATION_S):
         raise ValueError(f"duration must be a number of seconds in (0, {MAX_DURATION_S:g}], got {duration_s!r}")
-    eval_env_config(scenario, "setpoints", throttle_max=throttle_max)  # a bad ceiling fails before any output
+    default = eval_env_config(scenario, "setpoints", throttle_max=throttle_max)  # a bad ceiling fails before any output
     if turbulence_sigma_mps is None:  # the test set's level: 1 m/s, or a task preset's own (wake_surfing)
-        turbulence_sigma_mps = eval_env_config(scenario, "setpoints").randomisation.turbulence_sigma_mps
+        turbulence_sigma_mps = default.randomisation.turbulence_sigma_mps
     if not (isinstance(turbulence_sigma_mps, (int, float)) and math.isfinite(turbulence_sigma_mps) and turbulence_sigma_mps >= 0):
         raise ValueError(f"turbulence sigma must be a finite number >= 0, got {turbulence_sigma_mps!r}")
     if seeds is None or len(seeds) == 0:

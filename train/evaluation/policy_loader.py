@@ -118,9 +118,8 @@ def load_policy(spec: str, *, action_mode: str | None = None, name: str | None =
                              f"actions, but it is flown with {mode!r} actions")
         from ..sb3.guard import guarded
 
-        spec_gains = meta["action_guard"] if isinstance(meta["action_guard"], dict) else None
         try:
-            act = guarded(act, spec_gains)
+            act = guarded(act, meta["action_guard"])  # True: the default gains; a mapping: the sidecar's
         except ValueError as exc:
             raise ValueError(f"policy {spec!r}: its metadata's action_guard: {exc}") from None
     return EvalPolicy(name or path.stem, mode, act, float(meta.get("control_hz", 10.0) or 10.0), str(path))
