@@ -7,7 +7,8 @@ from __future__ import annotations
 import numba as nb
 import numpy as np
 
-from .biot_savart import CORE_NONE, branch, branch_cored, core_radius, leg, leg_cored, leg_sheet, point_to_knots
+from .biot_savart import (CORE_NONE, STRIP_COLUMNS, branch, branch_cored, core_radius, leg, leg_cored, leg_sheet_framed,
+                          point_to_knots, strip_frames)
 from .posing import bound_length, branch_directions, to_ned
 
 __all__ = ["lu_solve_inplace", "static_aic", "assemble_and_solve"]
@@ -129,6 +130,10 @@ def assemble_and_solve(
     lw = np.empty(n_knots)  # trailing leg . n
     cw = np.empty(n_knots)  # chordwise branch . n (other vehicles' knots only)
     lcv = np.empty((n_knots, 3) if store else (0, 3))  # chordwise branch - trailing leg (other vehicles' knots)
+    # the sheet law's strip of each knot depends on the knot alone: once per solve, not per control point
+    frames = np.empty((n_knots if sheet is not None else 0, STRIP_COLUMNS))
+    if sheet is not None:
+        strip_frames(trail, x3, knot_vehicle, knot_surface, frames)
     for j in range(n_panels):
         vj = panel_vehicle[j]
         to_ned(rot[vj], pos[vj], control_b[j], cp)
@@ -152,9 +157,8 @@ def assemble_and_solve(
                 rc = rc_s
             if src != vj:
                 if sheet is not None:
-                    lx, ly, lz = leg_sheet(t[0], t[1], t[2], r3[k, 0], r3[k, 1], r3[k, 2], inv3[k], cutoff, rc, overlap_core,
-                                           x3, k, k > 0 and knot_surface[k - 1] == knot_surface[k],
-                                           k < n_knots - 1 and knot_surface[k + 1] == knot_surface[k], recv_w)
+                    lx, ly, lz = leg_sheet_framed(t[0], t[1], t[2], r3[k, 0], r3[k, 1], r3[k, 2], inv3[k], cutoff, rc,
+                                                  overlap_core, frames[k], recv_w)
                 else:
                     lx, ly, lz = leg_cored(t[0], t[1], t[2], r3[k, 0], r3[k, 1], r3[k, 2], inv3[k], cutoff, rc, overlap_core)
             else:

@@ -28,7 +28,7 @@ import numpy as np
 
 from .arrays import evaluate_formation
 from .aic import assemble_and_solve, lu_solve_inplace
-from .biot_savart import branch, leg, point_to_knots
+from .biot_savart import STRIP_COLUMNS, branch, leg, point_to_knots, strip_frames
 from .kernels import CORE_NONE, field_velocity, posed_lattice
 from .residual import add_saving_residual
 
@@ -61,6 +61,16 @@ def _add_kutta_joukowski(f, v, g, wx, wy, wz, ox, oy, oz, ex, ey, ez, lx, ly, lz
 
 
 @_jit
+def _strip_frames_of(wake, trail, x3):
+    """The sheet law's strip of every knot of the posed lattice (:func:`formation_env.wake.biot_savart.strip_frames`),
+    once per formation for the field at every bound midpoint; (0, STRIP_COLUMNS) without the sheet law."""
+    frames = np.empty((x3.shape[0] if wake.sheet is not None else 0, STRIP_COLUMNS))
+    if wake.sheet is not None:
+        strip_frames(trail, x3, wake.knot_vehicle, wake.knot_surface, frames)
+    return frames
+
+
+@_jit
 def induced_drag_one(wake, gamma, pos, euler, speed, alpha, beta, out_drag, air_density=AIR_DENSITY_SL):
     """Induced drag (N, wind axes, positive rearwards) of each of the V vehicles of one formation
     into ``out_drag`` (V,), for the circulation ``gamma`` (N,) solved at these poses
@@ -70,6 +80,7 @@ def induced_drag_one(wake, gamma, pos, euler, speed, alpha, beta, out_drag, air_
     rot, vel, trail, x1, x3, origin, bound_dir, chord_dir, r1, inv1, r3, inv3 = posed_lattice(
         pos, euler, speed, alpha, beta, wake.knot_x1_b, wake.knot_x3_b, wake.knot_vehicle, wake.knot_surface,
         wake.surface_origin_b, wake.surface_vehicle, wake.surface_knot_start)
+    frames = _strip_frames_of(wake, trail, x3)
     f = np.zeros((nv, 3))  # summed Kutta-Joukowski force per vehicle, NED
     for j in range(n_panels):
         v = wake.panel_vehicle[j]
@@ -84,7 +95,7 @@ def induced_drag_one(wake, gamma, pos, euler, speed, alpha, beta, out_drag, air_
                                     wake.surface_knot_start, wake.surface_panel_start, wake.surface_vehicle,
                                     wake.surface_core_scale, wake.cutoff_m, wake.core_mode, wake.kinematic_viscosity,
                                     wake.overlap_core_m, r1, inv1, r3, inv3, wake.sheet,
-                                    0.0 if wake.sheet is None else np.sqrt(lx * lx + ly * ly + lz * lz))
+                                    0.0 if wake.sheet is None else np.sqrt(lx * lx + ly * ly + lz * lz), frames)
         _add_kutta_joukowski(f, v, air_density * gamma[j], vel[v, 0], vel[v, 1], vel[v, 2], ox, oy, oz, ex, ey, ez,
                              lx, ly, lz)
     for v in range(nv):
@@ -242,6 +253,7 @@ def induced_drags_one(wake, wake_alone, pos, euler, speed, alpha, beta, gamma_fo
     rot, vel, trail, x1, x3, origin, bound_dir, chord_dir, r1, inv1, r3, inv3 = posed_lattice(
         pos, euler, speed, alpha, beta, wake.knot_x1_b, wake.knot_x3_b, wake.knot_vehicle, wake.knot_surface,
         wake.surface_origin_b, wake.surface_vehicle, wake.surface_knot_start)
+    frames = _strip_frames_of(wake, trail, x3)
     f = np.zeros((nv, 3))  # summed Kutta-Joukowski force per vehicle, NED: in formation
     fa = np.zeros((nv, 3))  # and alone
     for j in range(n_panels):
@@ -255,7 +267,7 @@ def induced_drags_one(wake, wake_alone, pos, euler, speed, alpha, beta, gamma_fo
                                     gamma_formation, wake.surface_knot_start, wake.surface_panel_start,
                                     wake.surface_vehicle, wake.surface_core_scale, wake.cutoff_m, wake.core_mode,
                                     wake.kinematic_viscosity, wake.overlap_core_m, r1, inv1, r3, inv3, wake.sheet,
-                                    0.0 if wake.sheet is None else np.sqrt(lx * lx + ly * ly + lz * lz))
+                                    0.0 if wake.sheet is None else np.sqrt(lx * lx + ly * ly + lz * lz), frames)
         _add_kutta_joukowski(f, v, air_density * gamma_formation[j], vel[v, 0], vel[v, 1], vel[v, 2], ox, oy, oz,
                              ex, ey, ez, lx, ly, lz)
         # alone: no other vehicle (the separate solve adds the empty others' field, 0.0, as here)

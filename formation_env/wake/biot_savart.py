@@ -14,7 +14,8 @@ import numpy as np
 
 __all__ = ["branch", "branch_cored", "leg", "leg_cored", "core_radius", "point_to_knots", "segment_velocity", "leg_velocity",
            "FOUR_PI", "CORE_NONE", "CORE_LAMB_OSEEN", "CORE_KURYLOWICH", "LAMB_OSEEN_C", "KURYLOWICH_C",
-           "OVERLAP_CORE_CHORD_FRACTION", "CORE_PEAK", "leg_sheet", "SHEET_BLEND_INNER", "SHEET_ON",
+           "OVERLAP_CORE_CHORD_FRACTION", "CORE_PEAK", "leg_sheet", "leg_sheet_framed", "strip_frame", "strip_frames",
+           "STRIP_COLUMNS", "SHEET_BLEND_INNER", "SHEET_ON",
            "SHEET_BLEND_OUTER"]
 
 FOUR_PI = 4.0 * math.pi
@@ -162,6 +163,54 @@ def _strip_g(x, c):
     return 0.5 * math.log(x * x + c * c), math.atan(x / c) / c
 
 
+# The strip frame of a knot (:func:`strip_frame`): the columns of one row of ``strip_frames``.
+STRIP_OK, STRIP_EX, STRIP_EY, STRIP_EZ, STRIP_NX, STRIP_NY, STRIP_NZ, STRIP_W_LO, STRIP_W_HI, STRIP_W, STRIP_SC = range(11)
+STRIP_COLUMNS = 11
+
+
+@_jit_inline
+def strip_frame(tx, ty, tz, x3, k, has_lo, has_hi, out):
+    """The strip of the trailing leg at knot k (unit direction t; x3 the posed 3/4-chord knots; ``has_lo`` /
+    ``has_hi`` as :func:`leg_sheet`'s) into ``out`` (STRIP_COLUMNS,): the strip's unit direction e across the
+    leg (perpendicular to t, from the neighbouring knots), n = t x e, the half-widths to the previous and next
+    knot w_lo, w_hi, the width w and the centre's offset sc = (w_hi - w_lo) / 2 along e, m; out[STRIP_OK] 1.0
+    where the strip exists (0.0: a degenerate strip, the leg takes :func:`leg_cored`). It depends on the knot
+    alone, not on the point the leg is seen from: computed once per knot and solve (issue 26), every value
+    the same operations in the same order as :func:`leg_sheet` made them per point."""
+    lo_x = lo_y = lo_z = hi_x = hi_y = hi_z = 0.0
+    if has_lo:
+        lo_x, lo_y, lo_z = x3[k - 1, 0] - x3[k, 0], x3[k - 1, 1] - x3[k, 1], x3[k - 1, 2] - x3[k, 2]
+    if has_hi:
+        hi_x, hi_y, hi_z = x3[k + 1, 0] - x3[k, 0], x3[k + 1, 1] - x3[k, 1], x3[k + 1, 2] - x3[k, 2]
+    ex, ey, ez = hi_x - lo_x, hi_y - lo_y, hi_z - lo_z
+    et = ex * tx + ey * ty + ez * tz
+    ex, ey, ez = ex - et * tx, ey - et * ty, ez - et * tz
+    en = math.sqrt(ex * ex + ey * ey + ez * ez)
+    if en < _TINY_H:
+        out[STRIP_OK] = 0.0
+        return
+    ex, ey, ez = ex / en, ey / en, ez / en
+    w_lo = -0.5 * (lo_x * ex + lo_y * ey + lo_z * ez)  # >= 0: half-way to the previous knot along -e
+    w_hi = 0.5 * (hi_x * ex + hi_y * ey + hi_z * ez)
+    w = w_lo + w_hi
+    out[STRIP_OK] = 0.0 if w <= 0.0 else 1.0  # (a NaN width goes on, as the per-point law did)
+    out[STRIP_EX], out[STRIP_EY], out[STRIP_EZ] = ex, ey, ez
+    out[STRIP_NX], out[STRIP_NY], out[STRIP_NZ] = ty * ez - tz * ey, tz * ex - tx * ez, tx * ey - ty * ex
+    out[STRIP_W_LO], out[STRIP_W_HI], out[STRIP_W] = w_lo, w_hi, w
+    out[STRIP_SC] = 0.5 * (w_hi - w_lo)
+
+
+@_jit
+def strip_frames(trail, x3, knot_vehicle, knot_surface, out):
+    """:func:`strip_frame` of every knot of a posed lattice into ``out`` (K, STRIP_COLUMNS); trail (V, 3) the
+    vehicles' unit trailing-leg directions, x3 (K, 3) the posed 3/4-chord knots, NED."""
+    n_knots = x3.shape[0]
+    for k in range(n_knots):
+        t = trail[knot_vehicle[k]]
+        strip_frame(t[0], t[1], t[2], x3, k, k > 0 and knot_surface[k - 1] == knot_surface[k],
+                    k < n_knots - 1 and knot_surface[k + 1] == knot_surface[k], out[k])
+
+
 @_jit_inline
 def leg_sheet(tx, ty, tz, ax, ay, az, inv_a, cutoff, core_radius, overlap_core, x3, k, has_lo, has_hi, recv_w):
     """The sheet law of another vehicle's trailing leg at knot k, seen from P (x3 the posed 3/4-chord
@@ -179,30 +228,30 @@ def leg_sheet(tx, ty, tz, ax, ay, az, inv_a, cutoff, core_radius, overlap_core, 
     (:func:`_strip_h`), times the 3-D factor (1 + cos gamma) / (4 pi) of the strip's centre; the
     receiving segment is taken parallel to the strip. Beyond SHEET_BLEND_OUTER widths it is
     :func:`leg_cored` (they differ by O((width / distance)^2) there), with a smooth blend between.
-    Times the overlap core about the knot as :func:`leg_cored`. Unit strength."""
-    ta = tx * ax + ty * ay + tz * az
-    rp2 = max(ax * ax + ay * ay + az * az - ta * ta, 0.0)  # squared distance to the leg's line
-    # the strip's direction e (perpendicular to t) from the neighbouring knots
-    lo_x = lo_y = lo_z = hi_x = hi_y = hi_z = 0.0
-    if has_lo:
-        lo_x, lo_y, lo_z = x3[k - 1, 0] - x3[k, 0], x3[k - 1, 1] - x3[k, 1], x3[k - 1, 2] - x3[k, 2]
-    if has_hi:
-        hi_x, hi_y, hi_z = x3[k + 1, 0] - x3[k, 0], x3[k + 1, 1] - x3[k, 1], x3[k + 1, 2] - x3[k, 2]
-    ex, ey, ez = hi_x - lo_x, hi_y - lo_y, hi_z - lo_z
-    et = ex * tx + ey * ty + ez * tz
-    ex, ey, ez = ex - et * tx, ey - et * ty, ez - et * tz
-    en = math.sqrt(ex * ex + ey * ey + ez * ez)
-    if en < _TINY_H:
+    Times the overlap core about the knot as :func:`leg_cored`. Unit strength.
+
+    The strip (:func:`strip_frame`) depends on the knot only: the solve and the field compute it once per knot
+    (:func:`strip_frames`) and call :func:`leg_sheet_framed`, bit for bit this law."""
+    fr = np.empty(STRIP_COLUMNS)
+    strip_frame(tx, ty, tz, x3, k, has_lo, has_hi, fr)
+    return leg_sheet_framed(tx, ty, tz, ax, ay, az, inv_a, cutoff, core_radius, overlap_core, fr, recv_w)
+
+
+@_jit_inline
+def leg_sheet_framed(tx, ty, tz, ax, ay, az, inv_a, cutoff, core_radius, overlap_core, fr, recv_w):
+    """:func:`leg_sheet` with the knot's strip ``fr`` (a row of :func:`strip_frames`) computed beforehand."""
+    if fr[STRIP_OK] == 0.0:
         return leg_cored(tx, ty, tz, ax, ay, az, inv_a, cutoff, core_radius, overlap_core)
-    ex, ey, ez = ex / en, ey / en, ez / en
-    w_lo = -0.5 * (lo_x * ex + lo_y * ey + lo_z * ez)  # >= 0: half-way to the previous knot along -e
-    w_hi = 0.5 * (hi_x * ex + hi_y * ey + hi_z * ez)
-    w = w_lo + w_hi
+    w = fr[STRIP_W]
     scale = max(w, recv_w)
     outer = SHEET_BLEND_OUTER * scale
-    if w <= 0.0 or rp2 >= outer * outer:
+    ta = tx * ax + ty * ay + tz * az
+    rp2 = max(ax * ax + ay * ay + az * az - ta * ta, 0.0)  # squared distance to the leg's line
+    if rp2 >= outer * outer:
         return leg_cored(tx, ty, tz, ax, ay, az, inv_a, cutoff, core_radius, overlap_core)
-    nx, ny, nz = ty * ez - tz * ey, tz * ex - tx * ez, tx * ey - ty * ex
+    ex, ey, ez = fr[STRIP_EX], fr[STRIP_EY], fr[STRIP_EZ]
+    nx, ny, nz = fr[STRIP_NX], fr[STRIP_NY], fr[STRIP_NZ]
+    w_lo, w_hi = fr[STRIP_W_LO], fr[STRIP_W_HI]
     eta = ax * ex + ay * ey + az * ez
     zeta = ax * nx + ay * ny + az * nz
     dc = max(core_radius, cutoff)
@@ -221,7 +270,7 @@ def leg_sheet(tx, ty, tz, ax, ay, az, inv_a, cutoff, core_radius, overlap_core, 
         i_n = n1 - n2
         i_e = e1 - e2
     # 3-D factor (1 + cos gamma) / (4 pi) of the strip's centre, per unit strength (density 1 / w)
-    sc = 0.5 * (w_hi - w_lo)
+    sc = fr[STRIP_SC]
     cx, cy, cz = ax - sc * ex, ay - sc * ey, az - sc * ez
     rc2 = cx * cx + cy * cy + cz * cz
     cos_g = (tx * cx + ty * cy + tz * cz) / math.sqrt(rc2) if rc2 > 0.0 else 0.0

@@ -5,8 +5,10 @@ batches of arbitrary points."""
 from __future__ import annotations
 
 import numba as nb
+import numpy as np
 
-from .biot_savart import CORE_NONE, branch_cored, core_radius, leg_cored, leg_sheet, point_to_knots
+from .biot_savart import (CORE_NONE, STRIP_COLUMNS, branch_cored, core_radius, leg_cored, leg_sheet, leg_sheet_framed,
+                          point_to_knots, strip_frames)
 from .posing import posed_lattice
 
 __all__ = ["field_velocity", "field_velocity_batch"]
@@ -19,7 +21,7 @@ def field_velocity(
     px, py, pz, vehicle_filter, keep_only,
     x1, x3, bound_dir, chord_dir, trail, origin, airspeed, gamma,
     surface_knot_start, surface_panel_start, surface_vehicle, surface_core_scale,
-    cutoff, core_mode, nu, overlap_core, r1, inv1, r3, inv3, sheet=None, recv_w=0.0,
+    cutoff, core_mode, nu, overlap_core, r1, inv1, r3, inv3, sheet=None, recv_w=0.0, frames=None,
 ):
     """Velocity induced at one field point by the horseshoes of every vehicle except
     ``vehicle_filter`` (-1 excludes none) or, with ``keep_only``, of that vehicle alone
@@ -33,7 +35,9 @@ def field_velocity(
     for a vehicle's own field (the solve's law). ``sheet`` a float (not None; a compile-time switch as in
     :func:`formation_env.wake.aic.assemble_and_solve`): the trailing legs take the sheet law
     near their wake plane (:func:`leg_sheet`), averaged over a receiving segment of width ``recv_w``
-    (m; 0: at the point); passed, like ``overlap_core``, for the other vehicles' field."""
+    (m; 0: at the point); passed, like ``overlap_core``, for the other vehicles' field. ``frames`` (K,
+    STRIP_COLUMNS) or None: the knots' strips (:func:`~formation_env.wake.biot_savart.strip_frames` of this
+    posed lattice), for a caller that evaluates many points (None: each leg computes its own; the same values)."""
     vx = 0.0
     vy = 0.0
     vz = 0.0
@@ -58,7 +62,10 @@ def field_velocity(
             if k > k0:
                 g -= gamma[p0 + (k - k0) - 1]
             if g != 0.0:
-                if sheet is not None:
+                if sheet is not None and frames is not None:
+                    lx, ly, lz = leg_sheet_framed(t[0], t[1], t[2], r3[k, 0], r3[k, 1], r3[k, 2], inv3[k], cutoff, rc,
+                                                  overlap_core, frames[k], recv_w)
+                elif sheet is not None:
                     lx, ly, lz = leg_sheet(t[0], t[1], t[2], r3[k, 0], r3[k, 1], r3[k, 2], inv3[k], cutoff, rc, overlap_core,
                                            x3, k, k > k0, k < k1 - 1, recv_w)
                 else:
@@ -93,13 +100,16 @@ def field_velocity_batch(
         rot, vel, trail, x1, x3, origin, bound_dir, chord_dir, r1, inv1, r3, inv3 = posed_lattice(
             pos[b], euler[b], airspeed[b], alpha[b], beta[b], knot_x1_b, knot_x3_b, knot_vehicle, knot_surface,
             surface_origin_b, surface_vehicle, surface_knot_start)
+        frames = np.empty((x3.shape[0] if sheet is not None else 0, STRIP_COLUMNS))
+        if sheet is not None:
+            strip_frames(trail, x3, knot_vehicle, knot_surface, frames)
         for p in range(points.shape[1]):
             rw = 0.0 if recv_w is None else recv_w[p]
             wx, wy, wz = field_velocity(points[b, p, 0], points[b, p, 1], points[b, p, 2], vehicle_filter[p], keep_only,
                                         x1, x3, bound_dir, chord_dir, trail, origin, airspeed[b], gamma[b],
                                         surface_knot_start, surface_panel_start,
                                         surface_vehicle, surface_core_scale, cutoff, core_mode, nu, overlap_core, r1, inv1, r3,
-                                        inv3, sheet, rw)
+                                        inv3, sheet, rw, frames)
             out[b, p, 0] = wx
             out[b, p, 1] = wy
             out[b, p, 2] = wz

@@ -27,7 +27,7 @@ import numpy as np
 
 from .aic import assemble_and_solve, lu_solve_inplace, static_aic
 from .biot_savart import (_MIN_CORE_M, _TINY_H, CORE_KURYLOWICH, CORE_LAMB_OSEEN, CORE_NONE, CORE_PEAK,  # noqa: F401
-                          FOUR_PI, KURYLOWICH_C, LAMB_OSEEN_C, OVERLAP_CORE_CHORD_FRACTION, branch, branch_cored,
+                          STRIP_COLUMNS, strip_frames, FOUR_PI, KURYLOWICH_C, LAMB_OSEEN_C, OVERLAP_CORE_CHORD_FRACTION, branch, branch_cored,
                           core_radius, leg, leg_velocity, point_to_knots, segment_velocity, SHEET_ON)
 from .field import field_velocity, field_velocity_batch
 from .posing import bound_length, branch_directions, dcm_ned_to_body_1, place_lattice, posed_lattice, to_ned
@@ -92,6 +92,9 @@ def evaluate_one(
             vpts_out[j, 2] = wz
     else:
         pt = np.empty(3)
+        frames = np.empty((x1.shape[0] if sheet is not None else 0, STRIP_COLUMNS))
+        if sheet is not None:
+            strip_frames(trail, x3, knot_vehicle, knot_surface, frames)
         for j in range(n_panels):
             v = panel_vehicle[j]
             to_ned(rot[v], pos[v], eval_b[j], pt)
@@ -101,7 +104,7 @@ def evaluate_one(
             wx, wy, wz = field_velocity(pt[0], pt[1], pt[2], v, False, x1, x3, bound_dir, chord_dir, trail, origin,
                                         airspeed, gamma_out, surface_knot_start, surface_panel_start,
                                         surface_vehicle, surface_core_scale, cutoff, core_mode, nu, overlap_core,
-                                        r1, inv1, r3, inv3, sheet, recv_w)
+                                        r1, inv1, r3, inv3, sheet, recv_w, frames)
             vpts_out[j, 0] = wx
             vpts_out[j, 1] = wy
             vpts_out[j, 2] = wz
