@@ -17,10 +17,18 @@ _jit = nb.njit(cache=True, fastmath=False, error_model="numpy")
 
 
 @_jit
-def lu_solve_inplace(a, rhs):
+def lu_solve_inplace(a, rhs, row=None):
     """Solve a x = rhs by Gaussian elimination with partial pivoting (a and rhs are overwritten;
-    x is returned in rhs). The AIC is small and dense, so this beats a LAPACK call's overhead."""
+    x is returned in rhs). The AIC is small and dense, so this beats a LAPACK call's overhead.
+
+    Each elimination step copies the pivot row's remaining part into ``row`` (scratch of n floats; None:
+    allocated here) before updating the rows below it: the update loop then reads one array and writes
+    another, which LLVM vectorises (without the copy it must assume the two rows alias). Every element
+    gets the same operations in the same order, so the result is bit for bit the plain loop's; 2x faster
+    at n = 50 and 90, 1.4x at 20 (issue 26, runs/ note)."""
     n = a.shape[0]
+    if row is None:
+        row = np.empty(n)
     for k in range(n):
         p = k
         best = abs(a[k, k])
@@ -41,11 +49,14 @@ def lu_solve_inplace(a, rhs):
         if piv == 0.0:
             piv = 1e-300  # singular (degenerate geometry): stay finite rather than divide by zero
             a[k, k] = piv
+        rest = n - k - 1
+        for j in range(rest):
+            row[j] = a[k, k + 1 + j]
         for i in range(k + 1, n):
             m = a[i, k] / piv
             if m != 0.0:
-                for j in range(k + 1, n):
-                    a[i, j] -= m * a[k, j]
+                for j in range(rest):
+                    a[i, k + 1 + j] -= m * row[j]
                 rhs[i] -= m * rhs[k]
     for k in range(n - 1, -1, -1):
         s = rhs[k]
