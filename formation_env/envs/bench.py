@@ -28,8 +28,11 @@ SINGLE_CASES = [{"kind": "single", "mode": m, "learning": "all"} for m in ("surf
     {"kind": "single", "mode": "setpoints", "learning": "followers"}]
 BATCH_SIZES = (1, 8, 15, 16, 32, 256, 1024)
 TURBULENCE_CASES = ("von_karman", "lanes")  # EnvConfig.turbulence_field values measured at B = 256, sigma 1 m/s
-# formations of 3, 5 and 9 at B = 256 (issues 25 and 26: decisions/s and UAV physics steps/s against 2 UAVs)
-FORMATION_SIZE_CASES = ("echelon3", "vee5", "vee9")
+# formations of 3, 5 and 9 at B = 256 (issues 25 and 26: decisions/s and UAV physics steps/s against 2 UAVs), and the
+# 2-UAV close_formation, whose wake is theirs (the converged fidelity and load-weighted coupling; formation_keeping's is
+# the thesis's lattice and effective wind): the per-UAV cost of a formation against 2 UAVs at the same wake model
+FORMATION_SIZE_CASES = ("close_formation", "echelon3", "vee5", "vee9")
+SAME_WAKE_TWO = "close_formation"
 
 
 def _vector_cases(sizes) -> list[dict]:
@@ -171,11 +174,18 @@ def format_table(res: dict) -> str:
     # in any formation) and the learners' decisions/s (the followers, each a row of the VecEnv)
     first = res["configurations"][confs[0]]
     two = "vector B=256 setpoints learning=followers"
+    same = f"{two} {SAME_WAKE_TWO}"
     for key in first:
         if key.startswith(two + " ") and first[key].get("uavs", 2) > 2 and two in first:
-            cells = [f"{res['configurations'][c][key]['new'] / res['configurations'][c][two]['new']:.2f}x, "
-                     f"{res['configurations'][c][key]['agent_decisions_per_s']:,.0f} decisions/s" for c in confs]
-            lines.append(f"| {key}: UAV physics steps/s over 2 UAVs', follower decisions/s | " + " | ".join(cells) + " |")
+            cells = []
+            for c in confs:
+                rows = res["configurations"][c]
+                cell = f"{rows[key]['new'] / rows[two]['new']:.2f}x"
+                if same in rows:  # against 2 UAVs with the same (converged) wake
+                    cell += f" ({rows[key]['new'] / rows[same]['new']:.2f}x {SAME_WAKE_TWO}'s)"
+                cells.append(cell + f", {rows[key]['agent_decisions_per_s']:,.0f} decisions/s")
+            lines.append(f"| {key}: UAV physics steps/s over 2 UAVs' (formation_keeping; in brackets over "
+                         f"{SAME_WAKE_TWO}'s, the same wake), follower decisions/s | " + " | ".join(cells) + " |")
     ms = res.get("machine_spread")
     if ms:
         lines.append("| the machine: max/min of 40 runs of a fixed numpy workload | "
