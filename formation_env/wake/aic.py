@@ -8,7 +8,7 @@ import numba as nb
 import numpy as np
 
 from .biot_savart import (CORE_NONE, STRIP_COLUMNS, branch, branch_cored, core_radius, leg, leg_cored, leg_sheet_framed,
-                          point_to_knots, strip_frames)
+                          point_to_knots, point_to_knots3, strip_frames)
 from .posing import bound_length, branch_directions, to_ned
 
 __all__ = ["lu_solve_inplace", "static_aic", "assemble_and_solve"]
@@ -145,37 +145,53 @@ def assemble_and_solve(
     frames = np.empty((n_knots if sheet is not None else 0, STRIP_COLUMNS))
     if sheet is not None:
         strip_frames(trail, x3, knot_vehicle, knot_surface, frames)
+    # the knots' runs by surface (contiguous): the own/other decision, the source's leg direction and the core
+    # radius once per run and control point, not per knot
+    n_runs = 1
+    for k in range(1, n_knots):
+        if knot_surface[k] != knot_surface[k - 1]:
+            n_runs += 1
+    run_start = np.empty(n_runs + 1, dtype=np.int64)
+    run_start[0] = 0
+    r = 1
+    for k in range(1, n_knots):
+        if knot_surface[k] != knot_surface[k - 1]:
+            run_start[r] = k
+            r += 1
+    run_start[n_runs] = n_knots
     for j in range(n_panels):
         vj = panel_vehicle[j]
         to_ned(rot[vj], pos[vj], control_b[j], cp)
         for i in range(3):
             nrm[i] = rot[vj, 0, i] * normal_b[j, 0] + rot[vj, 1, i] * normal_b[j, 1] + rot[vj, 2, i] * normal_b[j, 2]
-        point_to_knots(cp[0], cp[1], cp[2], x1, x3, 0, n_knots, r1, inv1, r3, inv3)
         recv_w = 0.0
         if sheet is not None:
             recv_w = bound_length(x1, panel_left_knot[j])
-        rc_surface = -1  # the surface whose core radius rc_s holds (the radius depends on the point and the
-        rc_s = 0.0       # surface only, and a surface's knots are contiguous: once per surface, not per knot)
-        for k in range(n_knots):
-            src = knot_vehicle[k]
-            t = trail[src]
+        for r in range(n_runs):
+            k0 = run_start[r]
+            k1 = run_start[r + 1]
+            src = knot_vehicle[k0]
+            tx, ty, tz = trail[src, 0], trail[src, 1], trail[src, 2]
+            if src == vj:
+                # own knots: only the trailing legs (the bound and chordwise branches are in aic_static), plain
+                # with the cutoff; only the vectors from the 3/4-chord knots are needed
+                point_to_knots3(cp[0], cp[1], cp[2], x3, k0, k1, r3, inv3)
+                for k in range(k0, k1):
+                    lx, ly, lz = leg(tx, ty, tz, r3[k, 0], r3[k, 1], r3[k, 2], inv3[k], cutoff, 0.0)
+                    lw[k] = lx * nrm[0] + ly * nrm[1] + lz * nrm[2]
+                continue
+            point_to_knots(cp[0], cp[1], cp[2], x1, x3, k0, k1, r1, inv1, r3, inv3)
             rc = 0.0
-            if aic_core_mode != CORE_NONE and src != vj:
-                if knot_surface[k] != rc_surface:
-                    rc_surface = knot_surface[k]
-                    rc_s = core_radius(cp[0], cp[1], cp[2], origin, rc_surface, airspeed[src], surface_core_scale,
-                                       aic_core_mode, nu)
-                rc = rc_s
-            if src != vj:
+            if aic_core_mode != CORE_NONE:
+                rc = core_radius(cp[0], cp[1], cp[2], origin, knot_surface[k0], airspeed[src], surface_core_scale,
+                                 aic_core_mode, nu)
+            for k in range(k0, k1):
                 if sheet is not None:
-                    lx, ly, lz = leg_sheet_framed(t[0], t[1], t[2], r3[k, 0], r3[k, 1], r3[k, 2], inv3[k], cutoff, rc,
+                    lx, ly, lz = leg_sheet_framed(tx, ty, tz, r3[k, 0], r3[k, 1], r3[k, 2], inv3[k], cutoff, rc,
                                                   overlap_core, frames[k], recv_w)
                 else:
-                    lx, ly, lz = leg_cored(t[0], t[1], t[2], r3[k, 0], r3[k, 1], r3[k, 2], inv3[k], cutoff, rc, overlap_core)
-            else:
-                lx, ly, lz = leg(t[0], t[1], t[2], r3[k, 0], r3[k, 1], r3[k, 2], inv3[k], cutoff, rc)
-            lw[k] = lx * nrm[0] + ly * nrm[1] + lz * nrm[2]
-            if src != vj:
+                    lx, ly, lz = leg_cored(tx, ty, tz, r3[k, 0], r3[k, 1], r3[k, 2], inv3[k], cutoff, rc, overlap_core)
+                lw[k] = lx * nrm[0] + ly * nrm[1] + lz * nrm[2]
                 sx, sy, sz = branch_cored(chord_dir[k, 0], chord_dir[k, 1], chord_dir[k, 2], r3[k, 0], r3[k, 1], r3[k, 2],
                                           inv3[k], r1[k, 0], r1[k, 1], r1[k, 2], inv1[k], cutoff, overlap_core)
                 cw[k] = sx * nrm[0] + sy * nrm[1] + sz * nrm[2]

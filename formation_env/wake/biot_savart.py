@@ -12,7 +12,7 @@ import math
 import numba as nb
 import numpy as np
 
-__all__ = ["branch", "branch_cored", "leg", "leg_cored", "core_radius", "point_to_knots", "segment_velocity", "leg_velocity",
+__all__ = ["branch", "branch_cored", "leg", "leg_cored", "core_radius", "point_to_knots", "point_to_knots3", "segment_velocity", "leg_velocity",
            "FOUR_PI", "CORE_NONE", "CORE_LAMB_OSEEN", "CORE_KURYLOWICH", "LAMB_OSEEN_C", "KURYLOWICH_C",
            "OVERLAP_CORE_CHORD_FRACTION", "CORE_PEAK", "leg_sheet", "leg_sheet_framed", "strip_frame", "strip_frames",
            "STRIP_COLUMNS", "SHEET_BLEND_INNER", "SHEET_ON",
@@ -65,6 +65,17 @@ def point_to_knots(px, py, pz, x1, x3, k0, k1, r1, inv1, r3, inv3):
         r1[k, 0], r1[k, 1], r1[k, 2] = ax, ay, az
         n = math.sqrt(ax * ax + ay * ay + az * az)
         inv1[k] = 1.0 / n if n > 0.0 else 0.0
+        bx, by, bz = px - x3[k, 0], py - x3[k, 1], pz - x3[k, 2]
+        r3[k, 0], r3[k, 1], r3[k, 2] = bx, by, bz
+        n = math.sqrt(bx * bx + by * by + bz * bz)
+        inv3[k] = 1.0 / n if n > 0.0 else 0.0
+
+
+@_jit
+def point_to_knots3(px, py, pz, x3, k0, k1, r3, inv3):
+    """:func:`point_to_knots` for the 3/4-chord knots only (a vehicle's own trailing legs at its own control
+    points need nothing else): the same values."""
+    for k in range(k0, k1):
         bx, by, bz = px - x3[k, 0], py - x3[k, 1], pz - x3[k, 2]
         r3[k, 0], r3[k, 1], r3[k, 2] = bx, by, bz
         n = math.sqrt(bx * bx + by * by + bz * bz)
