@@ -7,8 +7,8 @@ from __future__ import annotations
 import numba as nb
 import numpy as np
 
-from .biot_savart import (CORE_NONE, STRIP_COLUMNS, branch, branch_cored, core_radius, leg, leg_cored, leg_sheet_framed,
-                          point_to_knots, point_to_knots3, strip_frames)
+from .biot_savart import (CORE_NONE, branch, branch_cored, core_radius, leg, leg_cored, leg_sheet_framed, point_to_knots,
+                          point_to_knots3, sheet_strip_frames)
 from .posing import bound_length, branch_directions, to_ned
 
 __all__ = ["lu_solve_inplace", "static_aic", "assemble_and_solve"]
@@ -104,7 +104,7 @@ def static_aic(knot_x1_b, knot_x3_b, knot_vehicle, knot_surface, surface_knot_st
 @_jit
 def assemble_and_solve(
     x1, x3, bound_dir, chord_dir, trail, vel, rot, pos, origin, airspeed,
-    knot_vehicle, knot_surface, surface_core_scale, panel_left_knot, panel_vehicle,
+    knot_vehicle, knot_surface, surface_knot_start, surface_core_scale, panel_left_knot, panel_vehicle,
     control_b, normal_b, aic_static, cutoff, aic_core_mode, nu, overlap_core, aic, gamma, r1, inv1, r3, inv3,
     vcross, sheet=None, keep=None,
 ):
@@ -142,23 +142,7 @@ def assemble_and_solve(
     cw = np.empty(n_knots)  # chordwise branch . n (other vehicles' knots only)
     lcv = np.empty((n_knots, 3) if store else (0, 3))  # chordwise branch - trailing leg (other vehicles' knots)
     # the sheet law's strip of each knot depends on the knot alone: once per solve, not per control point
-    frames = np.empty((n_knots if sheet is not None else 0, STRIP_COLUMNS))
-    if sheet is not None:
-        strip_frames(trail, x3, knot_vehicle, knot_surface, frames)
-    # the knots' runs by surface (contiguous): the own/other decision, the source's leg direction and the core
-    # radius once per run and control point, not per knot
-    n_runs = 1
-    for k in range(1, n_knots):
-        if knot_surface[k] != knot_surface[k - 1]:
-            n_runs += 1
-    run_start = np.empty(n_runs + 1, dtype=np.int64)
-    run_start[0] = 0
-    r = 1
-    for k in range(1, n_knots):
-        if knot_surface[k] != knot_surface[k - 1]:
-            run_start[r] = k
-            r += 1
-    run_start[n_runs] = n_knots
+    frames = sheet_strip_frames(sheet, trail, x3, knot_vehicle, knot_surface)
     for j in range(n_panels):
         vj = panel_vehicle[j]
         to_ned(rot[vj], pos[vj], control_b[j], cp)
@@ -167,9 +151,11 @@ def assemble_and_solve(
         recv_w = 0.0
         if sheet is not None:
             recv_w = bound_length(x1, panel_left_knot[j])
-        for r in range(n_runs):
-            k0 = run_start[r]
-            k1 = run_start[r + 1]
+        # surface by surface (a surface's knots are contiguous): the own/other decision, the source's leg direction
+        # and the core radius once per surface and control point, not per knot
+        for srf in range(surface_knot_start.shape[0] - 1):
+            k0 = surface_knot_start[srf]
+            k1 = surface_knot_start[srf + 1]
             src = knot_vehicle[k0]
             tx, ty, tz = trail[src, 0], trail[src, 1], trail[src, 2]
             if src == vj:
@@ -183,8 +169,7 @@ def assemble_and_solve(
             point_to_knots(cp[0], cp[1], cp[2], x1, x3, k0, k1, r1, inv1, r3, inv3)
             rc = 0.0
             if aic_core_mode != CORE_NONE:
-                rc = core_radius(cp[0], cp[1], cp[2], origin, knot_surface[k0], airspeed[src], surface_core_scale,
-                                 aic_core_mode, nu)
+                rc = core_radius(cp[0], cp[1], cp[2], origin, srf, airspeed[src], surface_core_scale, aic_core_mode, nu)
             for k in range(k0, k1):
                 if sheet is not None:
                     lx, ly, lz = leg_sheet_framed(tx, ty, tz, r3[k, 0], r3[k, 1], r3[k, 2], inv3[k], cutoff, rc,

@@ -28,7 +28,7 @@ import numpy as np
 
 from .arrays import evaluate_formation
 from .aic import assemble_and_solve, lu_solve_inplace
-from .biot_savart import STRIP_COLUMNS, branch, leg, point_to_knots, strip_frames
+from .biot_savart import branch, leg, point_to_knots, sheet_strip_frames
 from .kernels import CORE_NONE, field_velocity, posed_lattice
 from .residual import add_saving_residual
 
@@ -61,16 +61,6 @@ def _add_kutta_joukowski(f, v, g, wx, wy, wz, ox, oy, oz, ex, ey, ez, lx, ly, lz
 
 
 @_jit
-def _strip_frames_of(wake, trail, x3):
-    """The sheet law's strip of every knot of the posed lattice (:func:`formation_env.wake.biot_savart.strip_frames`),
-    once per formation for the field at every bound midpoint; (0, STRIP_COLUMNS) without the sheet law."""
-    frames = np.empty((x3.shape[0] if wake.sheet is not None else 0, STRIP_COLUMNS))
-    if wake.sheet is not None:
-        strip_frames(trail, x3, wake.knot_vehicle, wake.knot_surface, frames)
-    return frames
-
-
-@_jit
 def induced_drag_one(wake, gamma, pos, euler, speed, alpha, beta, out_drag, air_density=AIR_DENSITY_SL):
     """Induced drag (N, wind axes, positive rearwards) of each of the V vehicles of one formation
     into ``out_drag`` (V,), for the circulation ``gamma`` (N,) solved at these poses
@@ -80,7 +70,7 @@ def induced_drag_one(wake, gamma, pos, euler, speed, alpha, beta, out_drag, air_
     rot, vel, trail, x1, x3, origin, bound_dir, chord_dir, r1, inv1, r3, inv3 = posed_lattice(
         pos, euler, speed, alpha, beta, wake.knot_x1_b, wake.knot_x3_b, wake.knot_vehicle, wake.knot_surface,
         wake.surface_origin_b, wake.surface_vehicle, wake.surface_knot_start)
-    frames = _strip_frames_of(wake, trail, x3)
+    frames = sheet_strip_frames(wake.sheet, trail, x3, wake.knot_vehicle, wake.knot_surface)
     f = np.zeros((nv, 3))  # summed Kutta-Joukowski force per vehicle, NED
     for j in range(n_panels):
         v = wake.panel_vehicle[j]
@@ -125,7 +115,7 @@ def isolated_circulation_one(wake_alone, v, pos, euler, speed, alpha, beta, gamm
         pos1, eul1, sp1, al1, be1, w.knot_x1_b, w.knot_x3_b, w.knot_vehicle, w.knot_surface, w.surface_origin_b,
         w.surface_vehicle, w.surface_knot_start)
     assemble_and_solve(x1, x3, bound_dir, chord_dir, trail, vel, rot, pos1, origin, sp1, w.knot_vehicle,
-                       w.knot_surface, w.surface_core_scale, w.panel_left_knot, w.panel_vehicle, w.control_b, w.normal_b,
+                       w.knot_surface, w.surface_knot_start, w.surface_core_scale, w.panel_left_knot, w.panel_vehicle, w.control_b, w.normal_b,
                        w.aic_static, w.cutoff_m, w.aic_core_mode, w.kinematic_viscosity, w.overlap_core_m, np.empty((n, n)),
                        gamma_out, r1, inv1, r3, inv3, np.empty((0, 0, 3)), w.sheet)
     return pos1, eul1, sp1, al1, be1
@@ -253,7 +243,7 @@ def induced_drags_one(wake, wake_alone, pos, euler, speed, alpha, beta, gamma_fo
     rot, vel, trail, x1, x3, origin, bound_dir, chord_dir, r1, inv1, r3, inv3 = posed_lattice(
         pos, euler, speed, alpha, beta, wake.knot_x1_b, wake.knot_x3_b, wake.knot_vehicle, wake.knot_surface,
         wake.surface_origin_b, wake.surface_vehicle, wake.surface_knot_start)
-    frames = _strip_frames_of(wake, trail, x3)
+    frames = sheet_strip_frames(wake.sheet, trail, x3, wake.knot_vehicle, wake.knot_surface)
     f = np.zeros((nv, 3))  # summed Kutta-Joukowski force per vehicle, NED: in formation
     fa = np.zeros((nv, 3))  # and alone
     for j in range(n_panels):

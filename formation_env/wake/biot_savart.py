@@ -15,7 +15,7 @@ import numpy as np
 __all__ = ["branch", "branch_cored", "leg", "leg_cored", "core_radius", "point_to_knots", "point_to_knots3", "segment_velocity", "leg_velocity",
            "FOUR_PI", "CORE_NONE", "CORE_LAMB_OSEEN", "CORE_KURYLOWICH", "LAMB_OSEEN_C", "KURYLOWICH_C",
            "OVERLAP_CORE_CHORD_FRACTION", "CORE_PEAK", "leg_sheet", "leg_sheet_framed", "strip_frame", "strip_frames",
-           "STRIP_COLUMNS", "SHEET_BLEND_INNER", "SHEET_ON",
+           "STRIP_COLUMNS", "sheet_strip_frames", "SHEET_BLEND_INNER", "SHEET_ON",
            "SHEET_BLEND_OUTER"]
 
 FOUR_PI = 4.0 * math.pi
@@ -220,6 +220,16 @@ def strip_frames(trail, x3, knot_vehicle, knot_surface, out):
         t = trail[knot_vehicle[k]]
         strip_frame(t[0], t[1], t[2], x3, k, k > 0 and knot_surface[k - 1] == knot_surface[k],
                     k < n_knots - 1 and knot_surface[k + 1] == knot_surface[k], out[k])
+
+
+@_jit
+def sheet_strip_frames(sheet, trail, x3, knot_vehicle, knot_surface):
+    """The strips of a posed lattice's knots for the kernels' ``sheet`` switch: :func:`strip_frames` in a new (K,
+    STRIP_COLUMNS) array with the sheet law (``sheet`` a float), an empty (0, STRIP_COLUMNS) one without it (None)."""
+    out = np.empty((x3.shape[0] if sheet is not None else 0, STRIP_COLUMNS))
+    if sheet is not None:
+        strip_frames(trail, x3, knot_vehicle, knot_surface, out)
+    return out
 
 
 @_jit_inline

@@ -5,10 +5,9 @@ batches of arbitrary points."""
 from __future__ import annotations
 
 import numba as nb
-import numpy as np
 
-from .biot_savart import (CORE_NONE, STRIP_COLUMNS, branch_cored, core_radius, leg_cored, leg_sheet, leg_sheet_framed,
-                          point_to_knots, strip_frames)
+from .biot_savart import (CORE_NONE, branch_cored, core_radius, leg_cored, leg_sheet, leg_sheet_framed, point_to_knots,
+                          sheet_strip_frames)
 from .posing import posed_lattice
 
 __all__ = ["field_velocity", "field_velocity_batch"]
@@ -100,9 +99,7 @@ def field_velocity_batch(
         rot, vel, trail, x1, x3, origin, bound_dir, chord_dir, r1, inv1, r3, inv3 = posed_lattice(
             pos[b], euler[b], airspeed[b], alpha[b], beta[b], knot_x1_b, knot_x3_b, knot_vehicle, knot_surface,
             surface_origin_b, surface_vehicle, surface_knot_start)
-        frames = np.empty((x3.shape[0] if sheet is not None else 0, STRIP_COLUMNS))
-        if sheet is not None:
-            strip_frames(trail, x3, knot_vehicle, knot_surface, frames)
+        frames = sheet_strip_frames(sheet, trail, x3, knot_vehicle, knot_surface)
         for p in range(points.shape[1]):
             rw = 0.0 if recv_w is None else recv_w[p]
             wx, wy, wz = field_velocity(points[b, p, 0], points[b, p, 1], points[b, p, 2], vehicle_filter[p], keep_only,

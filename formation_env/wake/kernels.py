@@ -27,8 +27,8 @@ import numpy as np
 
 from .aic import assemble_and_solve, lu_solve_inplace, static_aic
 from .biot_savart import (_MIN_CORE_M, _TINY_H, CORE_KURYLOWICH, CORE_LAMB_OSEEN, CORE_NONE, CORE_PEAK,  # noqa: F401
-                          STRIP_COLUMNS, strip_frames, FOUR_PI, KURYLOWICH_C, LAMB_OSEEN_C, OVERLAP_CORE_CHORD_FRACTION, branch, branch_cored,
-                          core_radius, leg, leg_velocity, point_to_knots, segment_velocity, SHEET_ON)
+                          FOUR_PI, KURYLOWICH_C, LAMB_OSEEN_C, OVERLAP_CORE_CHORD_FRACTION, branch, branch_cored,
+                          core_radius, sheet_strip_frames, leg, leg_velocity, point_to_knots, segment_velocity, SHEET_ON)
 from .field import field_velocity, field_velocity_batch
 from .posing import bound_length, branch_directions, dcm_ned_to_body_1, place_lattice, posed_lattice, to_ned
 
@@ -73,7 +73,7 @@ def evaluate_one(
     shared = aic_core_mode == core_mode and _same_points(eval_b, control_b)
     vcross = np.empty((n_panels, n_panels, 3) if shared else (0, 0, 3))
     assemble_and_solve(x1, x3, bound_dir, chord_dir, trail, vel, rot, pos, origin, airspeed, knot_vehicle, knot_surface,
-                       surface_core_scale, panel_left_knot, panel_vehicle, control_b, normal_b, aic_static, cutoff,
+                       surface_knot_start, surface_core_scale, panel_left_knot, panel_vehicle, control_b, normal_b, aic_static, cutoff,
                        aic_core_mode, nu, overlap_core, aic, gamma_out, r1, inv1, r3, inv3, vcross, sheet, keep)
     if shared:
         for j in range(n_panels):
@@ -92,9 +92,7 @@ def evaluate_one(
             vpts_out[j, 2] = wz
     else:
         pt = np.empty(3)
-        frames = np.empty((x1.shape[0] if sheet is not None else 0, STRIP_COLUMNS))
-        if sheet is not None:
-            strip_frames(trail, x3, knot_vehicle, knot_surface, frames)
+        frames = sheet_strip_frames(sheet, trail, x3, knot_vehicle, knot_surface)
         for j in range(n_panels):
             v = panel_vehicle[j]
             to_ned(rot[v], pos[v], eval_b[j], pt)
