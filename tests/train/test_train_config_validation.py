@@ -10,6 +10,9 @@ from train.sb3.config import TrainConfig, load_hyperparams
 
 CASES = [
     ("ppo", "learning_rate: fast", "learning_rate"),
+    ("ppo", "learning_rate: lin_2.0", "learning_rate"),
+    ("ppo", "learning_rate: lin_x", "learning_rate"),
+    ("ppo", "learning_rate: exp_3.0e-4", "learning_rate"),
     ("ppo", "n_steps: -5", "n_steps"),
     ("ppo", "batch_size: 0", "batch_size"),
     ("ppo", "batch_size: 1", "batch_size"),

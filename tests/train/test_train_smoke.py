@@ -64,3 +64,21 @@ def test_init_policy_starts_a_run_from_another_runs_parameters(tmp_path, tiny):
     with pytest.raises(ValueError, match="does not fit"):
         train(scenario="formation_keeping", algo="ppo", action_mode="setpoints", seed=0, steps=64,
               out_dir=tmp_path / "b", overrides=wide, progress_bar=False, log=lambda m: None)
+
+
+def test_a_linear_learning_rate_decays_to_zero_and_the_zip_loads_alone(tmp_path, tiny):
+    """``learning_rate: lin_<initial>`` (the RL Zoo's form): the Adam step size falls linearly from the initial
+    value toward 0 over the run, the saved config keeps the string, and the zip loads with SB3 alone."""
+    from stable_baselines3 import PPO
+
+    rates = []
+    over = {**tiny("ppo"), "learning_rate": "lin_1.0e-3"}
+    train(scenario="formation_keeping", algo="ppo", action_mode="setpoints", seed=1, steps=256, out_dir=tmp_path / "a",
+          overrides=over, progress_bar=False, log=lambda m: None)
+    assert "lin_1.0e-3" in (tmp_path / "a" / "config.yaml").read_text()
+    model = PPO.load(str(tmp_path / "a" / "final_model.zip"), device="cpu")
+    for remaining, want in ((1.0, 1e-3), (0.5, 5e-4), (0.0, 0.0)):
+        rates.append(model.lr_schedule(remaining))
+        assert rates[-1] == pytest.approx(want, abs=1e-12)
+    # the optimiser holds the step size of the last update, set at the run's end (SB3 updates it before each one)
+    assert model.policy.optimizer.param_groups[0]["lr"] == 0.0

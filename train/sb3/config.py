@@ -7,7 +7,8 @@ used for scenarios without their own), in the style of the RL Baselines3 Zoo::
       n_timesteps: 1000000          # total environment steps (one step = one agent decision)
       n_formations: 32              # formations per FormationVecEnv (num_envs = formations x agents)
       policy: MlpPolicy
-      learning_rate: 3.0e-4         # any keyword of the SB3 algorithm's constructor
+      learning_rate: 3.0e-4         # any keyword of the SB3 algorithm's constructor ("lin_3.0e-4": a
+                                    # linear decay from 3e-4 to 0 over the run, as in the RL Zoo)
       policy_kwargs: {net_arch: [64, 64], log_std_init: -1.0, activation_fn: tanh}
       env_kwargs:                   # EnvConfig options; randomisation / reward are sub-dicts
         randomisation: {turbulence_sigma_mps: 1.0, initial_offset_m: 1.0}
@@ -147,6 +148,15 @@ def _check_special(algo: str, name: str, value):
                                  f"got {value!r}")
             return value
         return _check_value(where, name, value, ("float", 0.0, 10.0, "SAC: 'auto' or a number"), exclusive=True)
+    if name == "learning_rate" and isinstance(value, str):  # RL Zoo's "lin_<initial>": linear decay to 0 at the end
+        try:
+            ok = value.startswith("lin_") and 0.0 < float(value[4:]) <= 1.0
+        except ValueError:
+            ok = False
+        if not ok:
+            raise ValueError(f"{where}learning_rate must be a number in (0, 1] or 'lin_<initial value in (0, 1]>' "
+                             f"(linear decay to 0 over the run), got {value!r}")
+        return value
     if name == "target_entropy":  # "auto" or a number
         if value == "auto":
             return value

@@ -79,6 +79,10 @@ def _policy_kwargs(cfg: TrainConfig) -> dict:
 def build_model(cfg: TrainConfig, env):
     cls = _algo_class(cfg.algo)
     kw = dict(cfg.algo_kwargs)
+    if isinstance(kw.get("learning_rate"), str):  # "lin_<initial>" (validated): SB3's own schedule class, so a
+        from stable_baselines3.common.utils import LinearSchedule  # saved zip unpickles without this package
+
+        kw["learning_rate"] = LinearSchedule(float(kw["learning_rate"][4:]), 0.0, 1.0)
     if cfg.algo in ("sac", "td3"):
         noise = kw.pop("action_noise", None)
         if noise:
