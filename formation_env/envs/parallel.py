@@ -51,15 +51,23 @@ def reset_options(options) -> dict | None:
     return {k: v for k, v in options.items() if k in RESET_OPTIONS} or None
 
 
+def _clipped_values(action) -> list | None:
+    """The common case (a policy's float array of 4 finite values) without the general path's numpy calls: the
+    same float64 values (tolist gives a float16/32 entry's exact value) clipped the same way, as a list; None
+    for anything else (the general check decides)."""
+    if type(action) is np.ndarray and action.dtype.kind == "f" and action.shape == (4,):
+        vals = action.tolist()
+        if all(map(math.isfinite, vals)):
+            return [min(max(v, -1.0), 1.0) for v in vals]
+    return None
+
+
 def check_action(agent: str, action) -> np.ndarray:
     """One agent's action as 4 finite floats clipped to [-1, 1]; anything else (bool, complex, strings,
     NaN/inf, another shape) is a ``ValueError`` naming ``agent``."""
-    if type(action) is np.ndarray and action.dtype.kind == "f" and action.shape == (4,):
-        # the common case (a policy's float array), without the general path's numpy calls: the same
-        # float64 values (tolist gives a float16/32 entry's exact value), clipped the same way
-        vals = action.tolist()
-        if all(map(math.isfinite, vals)):
-            return np.array([min(max(v, -1.0), 1.0) for v in vals])
+    vals = _clipped_values(action)
+    if vals is not None:
+        return np.array(vals)
     raw = np.asarray(action)
     if raw.dtype == bool:
         raise ValueError(f"action of {agent!r} is boolean; actions must be 4 real numbers in [-1, 1], got {action!r}")
@@ -93,6 +101,7 @@ class FormationParallelEnv(ParallelEnv):
         self.substeps = self.sim.substeps
         self.possible_agents = [f"uav_{i}" for i in self.agent_indices]
         self._index = {a: i for a, i in zip(self.possible_agents, self.agent_indices)}
+        self._agent_set = frozenset(self.possible_agents)
         self.agents: list[str] = []
         if self.config.obs_mode == "dict":
             self._obs_space = spaces.Dict({k: spaces.Box(-OBS_CLIP, OBS_CLIP, (s,), dtype=np.float32)
@@ -150,7 +159,8 @@ class FormationParallelEnv(ParallelEnv):
         rewards_all, done, trunc = out.reward, bool(out.terminated[0]), bool(out.truncated[0])
         obs = self._observations()
         infos = self._infos()
-        rewards = {a: float(rewards_all[0, i]) for a, i in self._index.items()}
+        rewards_row = rewards_all[0].tolist()  # Python floats, as float() of each element
+        rewards = {a: rewards_row[i] for a, i in self._index.items()}
         terminations = {a: done for a in self.agents}
         truncations = {a: trunc for a in self.agents}
         if done or trunc:
@@ -181,6 +191,12 @@ class FormationParallelEnv(ParallelEnv):
     def _validate_actions(self, actions) -> np.ndarray:
         if not isinstance(actions, dict):
             raise ValueError(f"actions must be a dict agent -> array of shape (4,), got {type(actions).__name__}")
+        if actions.keys() == self._agent_set:  # every agent acts (the common case): no name is unknown or missing
+            rows = []
+            for agent in self.possible_agents:
+                vals = _clipped_values(actions[agent])
+                rows.append(vals if vals is not None else check_action(agent, actions[agent]))
+            return np.array(rows, dtype=float)
         unknown = sorted(set(actions) - set(self.possible_agents))
         if unknown:
             raise ValueError(f"unknown agent name(s) {unknown}; agents are {self.possible_agents}")

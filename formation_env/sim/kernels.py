@@ -215,6 +215,18 @@ def min_separation_each(x, out):
 
 
 @_jit
+def separations_if_finite(x, out):
+    """Whether every element of the states x (V, 16) is finite; if so :func:`min_separation_each` into out (the
+    infos' check and distances in one call: a formation whose state is finite has finite infos)."""
+    for i in range(x.shape[0]):
+        for k in range(x.shape[1]):
+            if not math.isfinite(x[i, k]):
+                return False
+    min_separation_each(x, out)
+    return True
+
+
+@_jit
 def position_finite(x, a):
     """Whether aircraft a's CG position (state x (V, 16)) is finite."""
     return math.isfinite(x[a, POS_N]) and math.isfinite(x[a, POS_E]) and math.isfinite(x[a, POS_D])

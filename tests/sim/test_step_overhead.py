@@ -19,25 +19,37 @@ def _sim():
     return Simulation(cfg, batch_size=2)
 
 
+def _step_both(a, b, act):
+    a.step(act)  # through the packed structs' entry point
+    # b through numba's dispatcher: a Fortran-ordered actions array never takes the fast path
+    b._actions[:, b.agent_mask] = act
+    fortran = np.asfortranarray(b._actions)
+    assert step_mod._ENTRY.get(b.params, b.state, fortran, b.output)[0] is step_mod.decide_range
+    step_mod.step(b.params, b.state, fortran, b.output)
+    for name in ("observation", "reward", "terminated", "truncated", "separation_m", "slot_error_m"):
+        assert np.array_equal(getattr(a.output, name), getattr(b.output, name)), name
+    assert np.array_equal(a.state.aircraft, b.state.aircraft)
+
+
 def test_entry_point_steps_bit_for_bit_as_the_dispatcher():
     a, b = _sim(), _sim()
     a.reset(seeds=[11, 12])
     b.reset(seeds=[11, 12])
     rng = np.random.default_rng(3)
     for _ in range(6):
-        act = rng.uniform(-1, 1, size=(2, a.n_agents, 4))
-        a.step(act)  # through the resolved entry point
-        # b through numba's dispatcher: a Fortran-ordered actions array never takes the fast path
-        b._actions[:, b.agent_mask] = act
-        fortran = np.asfortranarray(b._actions)
-        assert step_mod._ENTRY.get(b.params, b.state, fortran, b.output) is step_mod.decide_range
-        step_mod.step(b.params, b.state, fortran, b.output)
-        for name in ("observation", "reward", "terminated", "truncated", "separation_m", "slot_error_m"):
-            assert np.array_equal(getattr(a.output, name), getattr(b.output, name)), name
-        assert np.array_equal(a.state.aircraft, b.state.aircraft)
-    entry = step_mod._ENTRY.get(a.params, a.state, a._actions, a.output)
-    assert entry is not step_mod.decide_range  # the fast path was taken for the Simulation's own arrays
-    assert step_mod._ENTRY.get(a.params, a.state, a._actions, a.output) is entry  # resolved once
+        _step_both(a, b, rng.uniform(-1, 1, size=(2, a.n_agents, 4)))
+    kernel, args = step_mod._ENTRY.get(a.params, a.state, a._actions, a.output)
+    assert kernel is not step_mod.decide_range  # the fast path was taken for the Simulation's own arrays
+    assert isinstance(args[0], step_mod.StepStructs) and args[1] is a._actions
+    again = step_mod._ENTRY.get(a.params, a.state, a._actions, a.output)
+    assert again[0] is kernel and again[1][0] is args[0]  # packed and resolved once
+    # the packed structs share the Simulation's arrays: what Python writes afterwards (a reset of one formation,
+    # the state written in place) is what the packed step reads, and what it writes is what Python reads
+    a.reset(indices=[1], seeds=[99])
+    b.reset(indices=[1], seeds=[99])
+    for _ in range(4):
+        _step_both(a, b, rng.uniform(-1, 1, size=(2, a.n_agents, 4)))
+    assert step_mod._ENTRY.get(a.params, a.state, a._actions, a.output)[1][0] is args[0]
 
 
 def test_entry_point_cache_is_bounded_and_checks_identity():
@@ -49,11 +61,12 @@ def test_entry_point_cache_is_bounded_and_checks_identity():
     assert len(cache.cache) == cache.SIZE
     s = sims[-1]
     key = (id(s.params), id(s.state), id(s.output))
-    entry, params, state, out = cache.cache[key]
+    entry, packed, params, state, out = cache.cache[key]
     assert params is s.params and state is s.state and out is s.output
     # an object at a cached id but not the cached object (as after garbage collection) is resolved anew
-    cache.cache[key] = ("stale", object(), state, out)
-    assert cache.get(s.params, s.state, s._actions, s.output) == entry
+    cache.cache[key] = ("stale", None, object(), state, out)
+    kernel, args = cache.get(s.params, s.state, s._actions, s.output)
+    assert kernel == entry and args[0] is not packed
 
 
 def test_info_separations_equal_separation_each_bit_for_bit():
@@ -84,3 +97,20 @@ def test_fast_action_check_equals_the_general_path(action):
 def test_fast_action_check_still_rejects_non_finite(bad):
     with pytest.raises(ValueError, match="uav_1.*NaN or inf"):
         check_action("uav_1", bad)
+
+
+def test_separations_if_finite_flags_any_non_finite_element():
+    """The infos' one compiled call: True and min_separation_each's distances for a finite state; False for a
+    NaN or inf in any element (not only the positions: the infos of such a formation are cleaned)."""
+    from formation_env.sim.kernels import min_separation_each, separations_if_finite
+
+    rng = np.random.default_rng(7)
+    for _ in range(20):
+        x = rng.normal(size=(int(rng.integers(2, 6)), 16)) * 10.0
+        got, ref = np.empty(x.shape[0]), np.empty(x.shape[0])
+        assert separations_if_finite(x, got)
+        min_separation_each(x, ref)
+        assert np.array_equal(got, ref)
+        i, k = int(rng.integers(x.shape[0])), int(rng.integers(16))
+        x[i, k] = [np.nan, np.inf, -np.inf][int(rng.integers(3))]
+        assert not separations_if_finite(x, got)
