@@ -114,3 +114,21 @@ def test_separations_if_finite_flags_any_non_finite_element():
         i, k = int(rng.integers(x.shape[0])), int(rng.integers(16))
         x[i, k] = [np.nan, np.inf, -np.inf][int(rng.integers(3))]
         assert not separations_if_finite(x, got)
+
+
+def test_the_adapters_whole_dict_path_equals_the_per_agent_check():
+    """Every agent acting (the whole-dict fast path of FormationParallelEnv._validate_actions): the same (A, 4)
+    float64 array as check_action per agent, for float arrays of every width, lists and out-of-range values; a
+    bad value among them is still the per-agent error naming the agent."""
+    env = formation_env.parallel_env("formation_keeping", action_mode="setpoints", learning="all")
+    env.reset(seed=1)
+    rng = np.random.default_rng(2)
+    for dtype in (np.float16, np.float32, np.float64, list):
+        acts = {a: rng.uniform(-1.5, 1.5, 4) for a in env.possible_agents}
+        acts = {a: (v.tolist() if dtype is list else v.astype(dtype)) for a, v in acts.items()}
+        got = env._validate_actions(acts)
+        ref = np.stack([check_action(a, acts[a]) for a in env.possible_agents])
+        assert got.dtype == np.float64 and np.array_equal(got, ref)
+    acts["uav_1"] = np.array([0.0, np.nan, 0.0, 0.0])
+    with pytest.raises(ValueError, match="uav_1.*NaN or inf"):
+        env._validate_actions(acts)
