@@ -284,14 +284,22 @@ class _EntryPoints:
 
     numba's dispatcher finds the compiled version for the argument types on every call; for the step's
     nested structs of arrays that costs ~32 us a call (measured on the 2-core machine with no formation to
-    step), and unboxing the ~120 arrays of the three named tuples another ~10 us, together ~20 % of a single
+    step), and unboxing the ~120 arrays of the three named tuples another ~10 us: together ~20 % of a single
     env's decision. The structs are immutable named tuples of arrays and a Simulation passes the same objects
-    every decision, so they are packed once per set of objects (:func:`pack_structs`) and the entry point of
-    :func:`decide_packed` for that packing is called directly with it (~2 us). Keyed by the objects' ids and
-    checked by identity (the cache holds them, so an id cannot be reused while its entry lives; the oldest of
-    ``SIZE`` entries is dropped). ``actions`` is not part of the key (a caller may pass a new array each
-    decision): only a C-contiguous, aligned, writeable float64 array of 3 dimensions, the type the entry point
-    was resolved with, takes the fast path; anything else goes through the dispatcher with the named tuples.
+    every decision, so the entry point of :func:`decide_range` for their types is resolved once per set of
+    objects (``typeof`` of each, ~2 ms) and called directly; for a serial call (``packed``) the structs are
+    also packed once (:func:`pack_structs`) and :func:`decide_packed`'s entry point takes the one pointer
+    (~2 us).
+
+    Threads take the unpacked call: every thread's unboxing gives it its own reference counts for the arrays,
+    while the packed structs' arrays have one count each, which every array view the step takes per formation
+    increments and decrements; two threads doing so on the same counts slowed B = 1,024 by ~15 % (measured in
+    one process, alternating: 63.7 against 55.9 ms a decision, serial calls equal).
+
+    Keyed by the objects' ids and checked by identity (the cache holds them, so an id cannot be reused while its
+    entry lives; the oldest of ``SIZE`` entries is dropped). ``actions`` is not part of the key (a caller may
+    pass a new array each decision): only a C-contiguous, aligned, writeable float64 array of 3 dimensions, the
+    type the entry points were resolved with, takes the fast paths; anything else goes through the dispatcher.
     Any failure to resolve falls back to the dispatcher: results never depend on it (tested bit for bit)."""
 
     SIZE = 8
@@ -299,26 +307,35 @@ class _EntryPoints:
     def __init__(self) -> None:
         self.cache: dict = {}
 
-    def get(self, params, state, actions, out) -> tuple:
+    def get(self, params, state, actions, out, packed: bool = True) -> tuple:
         a = actions
         if not (isinstance(a, np.ndarray) and a.dtype == np.float64 and a.ndim == 3 and a.flags.c_contiguous
                 and a.flags.aligned and a.flags.writeable):
             return decide_range, (params, state, actions, out)
         key = (id(params), id(state), id(out))
         hit = self.cache.get(key)
-        if hit is not None and hit[2] is params and hit[3] is state and hit[4] is out:
-            return hit[0], (hit[1], actions)
+        if hit is None or hit[3] is not params or hit[4] is not state or hit[5] is not out:
+            hit = self._resolve(key, params, state, actions, out)
+        if packed and hit[1] is not None:
+            return hit[1], (hit[2], actions)
+        return hit[0], (params, state, actions, out)
+
+    def _resolve(self, key, params, state, actions, out) -> tuple:
+        direct, packed_entry, packed = decide_range, None, None
         try:
+            decide_range(params, state, actions, out, 0, 0)  # compiles or loads it (no formation stepped)
+            sig = tuple(decide_range.typeof_pyval(x) for x in (params, state, actions, out)) + (nb.types.int64,) * 2
+            direct = decide_range.overloads[sig].entry_point
             packed = pack_structs(params, state, out)
-            decide_packed(packed, actions, 0, 0)  # compiles or loads it (no formation stepped)
+            decide_packed(packed, actions, 0, 0)
             sig = tuple(decide_packed.typeof_pyval(x) for x in (packed, actions)) + (nb.types.int64,) * 2
-            entry = decide_packed.overloads[sig].entry_point
-        except Exception:  # noqa: BLE001 - an unexpected numba layout: the dispatcher serves every call
-            return decide_range, (params, state, actions, out)
+            packed_entry = decide_packed.overloads[sig].entry_point
+        except Exception:  # noqa: BLE001 - an unexpected numba layout: the dispatcher (or the direct entry) serves
+            packed_entry, packed = None, None
         if len(self.cache) >= self.SIZE:
             self.cache.pop(next(iter(self.cache)))
-        self.cache[key] = (entry, packed, params, state, out)
-        return entry, (packed, actions)
+        hit = self.cache[key] = (direct, packed_entry, packed, params, state, out)
+        return hit
 
 
 _ENTRY = _EntryPoints()
@@ -328,8 +345,10 @@ def step(params: StepParams, state: SimState, actions: np.ndarray, out: StepOutp
     """Advance every formation by one decision with ``actions`` (B, V, 4) in [-1, 1] (rows of
     PID-flown vehicles are ignored); results into ``out`` (returned). Inputs are not checked here:
     the env adapters validate once per decision."""
-    kernel, args = _ENTRY.get(params, state, actions, out)
-    _run_chunks(kernel, actions.shape[0], args)
+    n = actions.shape[0]
+    serial = n < PARALLEL_MIN_BATCH or _threads() <= 1  # (the threaded path takes the unpacked call: _EntryPoints)
+    kernel, args = _ENTRY.get(params, state, actions, out, packed=serial)
+    _run_chunks(kernel, n, args)
     return out
 
 

@@ -19,25 +19,32 @@ def _sim():
     return Simulation(cfg, batch_size=2)
 
 
-def _step_both(a, b, act):
-    a.step(act)  # through the packed structs' entry point
-    # b through numba's dispatcher: a Fortran-ordered actions array never takes the fast path
-    b._actions[:, b.agent_mask] = act
+def _step_three(a, b, c, act):
+    """a through the packed structs' entry point, c through the direct (unpacked) entry point, b through numba's
+    dispatcher (a Fortran-ordered actions array never takes a fast path): bit for bit the same."""
+    for sim in (a, b, c):
+        sim._actions[:, sim.agent_mask] = act
+    kernel, args = step_mod._ENTRY.get(a.params, a.state, a._actions, a.output, packed=True)
+    kernel(*args, 0, 2)
+    kernel, args = step_mod._ENTRY.get(c.params, c.state, c._actions, c.output, packed=False)
+    assert args[0] is c.params and kernel is not step_mod.decide_range
+    kernel(*args, 0, 2)
     fortran = np.asfortranarray(b._actions)
     assert step_mod._ENTRY.get(b.params, b.state, fortran, b.output)[0] is step_mod.decide_range
     step_mod.step(b.params, b.state, fortran, b.output)
-    for name in ("observation", "reward", "terminated", "truncated", "separation_m", "slot_error_m"):
-        assert np.array_equal(getattr(a.output, name), getattr(b.output, name)), name
-    assert np.array_equal(a.state.aircraft, b.state.aircraft)
+    for other in (b, c):
+        for name in ("observation", "reward", "terminated", "truncated", "separation_m", "slot_error_m"):
+            assert np.array_equal(getattr(a.output, name), getattr(other.output, name)), name
+        assert np.array_equal(a.state.aircraft, other.state.aircraft)
 
 
-def test_entry_point_steps_bit_for_bit_as_the_dispatcher():
-    a, b = _sim(), _sim()
-    a.reset(seeds=[11, 12])
-    b.reset(seeds=[11, 12])
+def test_entry_points_step_bit_for_bit_as_the_dispatcher():
+    a, b, c = _sim(), _sim(), _sim()
+    for sim in (a, b, c):
+        sim.reset(seeds=[11, 12])
     rng = np.random.default_rng(3)
     for _ in range(6):
-        _step_both(a, b, rng.uniform(-1, 1, size=(2, a.n_agents, 4)))
+        _step_three(a, b, c, rng.uniform(-1, 1, size=(2, a.n_agents, 4)))
     kernel, args = step_mod._ENTRY.get(a.params, a.state, a._actions, a.output)
     assert kernel is not step_mod.decide_range  # the fast path was taken for the Simulation's own arrays
     assert isinstance(args[0], step_mod.StepStructs) and args[1] is a._actions
@@ -45,11 +52,22 @@ def test_entry_point_steps_bit_for_bit_as_the_dispatcher():
     assert again[0] is kernel and again[1][0] is args[0]  # packed and resolved once
     # the packed structs share the Simulation's arrays: what Python writes afterwards (a reset of one formation,
     # the state written in place) is what the packed step reads, and what it writes is what Python reads
-    a.reset(indices=[1], seeds=[99])
-    b.reset(indices=[1], seeds=[99])
+    for sim in (a, b, c):
+        sim.reset(indices=[1], seeds=[99])
     for _ in range(4):
-        _step_both(a, b, rng.uniform(-1, 1, size=(2, a.n_agents, 4)))
+        _step_three(a, b, c, rng.uniform(-1, 1, size=(2, a.n_agents, 4)))
     assert step_mod._ENTRY.get(a.params, a.state, a._actions, a.output)[1][0] is args[0]
+    # Simulation.step itself (serial or threaded, whichever this machine's settings give) agrees too
+    d = _sim()
+    d.reset(seeds=[11, 12])
+    e = _sim()
+    e.reset(seeds=[11, 12])
+    for _ in range(3):
+        act = rng.uniform(-1, 1, size=(2, d.n_agents, 4))
+        d.step(act)
+        e._actions[:, e.agent_mask] = act
+        step_mod.step(e.params, e.state, np.asfortranarray(e._actions), e.output)
+        assert np.array_equal(d.state.aircraft, e.state.aircraft) and np.array_equal(d.output.reward, e.output.reward)
 
 
 def test_entry_point_cache_is_bounded_and_checks_identity():
@@ -61,10 +79,11 @@ def test_entry_point_cache_is_bounded_and_checks_identity():
     assert len(cache.cache) == cache.SIZE
     s = sims[-1]
     key = (id(s.params), id(s.state), id(s.output))
-    entry, packed, params, state, out = cache.cache[key]
+    direct, entry, packed, params, state, out = cache.cache[key]
     assert params is s.params and state is s.state and out is s.output
+    assert cache.get(s.params, s.state, s._actions, s.output, packed=False) == (direct, (params, state, s._actions, out))
     # an object at a cached id but not the cached object (as after garbage collection) is resolved anew
-    cache.cache[key] = ("stale", None, object(), state, out)
+    cache.cache[key] = ("stale", "stale", None, object(), state, out)
     kernel, args = cache.get(s.params, s.state, s._actions, s.output)
     assert kernel == entry and args[0] is not packed
 
