@@ -131,7 +131,9 @@ class StepStructs(structref.StructRefProxy):
     """(params, state, out) packed once per Simulation (:func:`pack_structs`). Python passes one pointer a
     decision instead of numba unboxing the ~120 arrays of the three named tuples (~10 us a call measured on the
     2-core machine: 5-7 % of a single env's decision). The packed arrays are the same buffers (numba's unboxed
-    array keeps the NumPy array alive and writes into its memory), so what the step writes is what Python reads."""
+    array keeps the NumPy array alive and writes into its memory), so what the step writes is what Python reads.
+    Serial calls only: the packed arrays' reference counts are shared, and two threads taking array views on them
+    contend (:class:`_EntryPoints`)."""
 
 
 structref.define_boxing(StepStructsType, StepStructs)
