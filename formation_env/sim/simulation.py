@@ -51,7 +51,6 @@ from .warmup import ensure_warm
 __all__ = ["Simulation", "SimOutput", "InfoArrays", "RESET_OPTIONS", "INFO_REWARD_KEYS", "reward_info_key",
            "separation_each"]
 
-
 #: the options :meth:`Simulation.reset` takes (an unknown one is a ``TypeError``)
 RESET_OPTIONS = ("steady_wind_ned",)
 
