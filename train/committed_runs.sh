@@ -7,7 +7,8 @@
 # evaluation; issue 23 part 7: close_formation, echelon3, wake_surfing and wake_surfing_random_leader retrained on the
 # converged wake with the same commands, sharing the two cores with evaluations and sweeps; issues 24/25: close_formation
 # and vee5 retrained with the saving weighted 8, now their recipes' value, the same commands; vee5_mappo retrained on the
-# converged wake with the same command: seeds 0 and 1 two at a time, seed 2 beside their held-out evaluation).
+# converged wake with the same command: seeds 0 and 1 two at a time, seed 2 beside their held-out evaluation; vee5 retrained
+# with its recipe's 4M steps and decayed step size: seeds 0 and 1 two at a time, seed 2 beside them and their evaluation).
 # Usage: bash train/committed_runs.sh [RUNS_DIR]
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -23,7 +24,7 @@ jobs_list() {
     echo "reconfiguration 2500000 $seed"
     echo "wake_surfing 2000000 $seed"
     echo "wake_surfing_random_leader 2000000 $seed"
-    echo "vee5 2000000 $seed"
+    echo "vee5 4000000 $seed"       # issue 25: the recipe's 4M steps with the step size decayed linearly
     echo "vee5_mappo 2000000 $seed"   # vee5 with train/hyperparams/mappo.yml (the centralised critic)
     echo "echelon3 3000000 $seed"   # issue 25: the recipe's 3M steps with the step size decayed linearly
   done

@@ -65,6 +65,11 @@ def test_the_committed_vee_rotation_record_is_what_the_policy_flies():
     eps, cols = refly(rec, "vee_rotation", "vee5_ppo_setpoints_seed2")
     assert [e["reconfig_success"] for e in eps] == cols["reconfig_success"][:2]
     assert [e["collision"] for e in eps] == cols["collision"][:2]
-    assert [e["rms_along_track_m"] for e in eps] == pytest.approx(cols["rms_along_track_m"][:2], rel=1e-5, abs=1e-6)
+    # The record flew its 100 episodes in one batch, this test two: the policy's forward pass over a different number
+    # of rows can round differently in the last bits (the BLAS kernel follows the matrix shape), and a turbulent
+    # 90-s hand-over amplifies that (measured: the policy's actions differ by up to 4e-7 between a batch of 500 rows and
+    # single rows, and 7e-5 relative on the second episode's along-track RMS here). The outcomes
+    # above are exact; the RMS is held to 1e-3.
+    assert [e["rms_along_track_m"] for e in eps] == pytest.approx(cols["rms_along_track_m"][:2], rel=1e-3, abs=1e-6)
     for ctrl, summary in rec["summaries"].items():
         assert summary["reconfig_success_rate"] == pytest.approx(np.mean(rec["episodes"][ctrl]["reconfig_success"]))
