@@ -90,7 +90,7 @@ def build_callbacks(cfg: TrainConfig, run_dir: Path, state: dict, log: Callable[
 
                 act = guarded(act, cfg.action_guard)
             summ = summarise(run_episodes(FunctionPolicy(act), self.config, self.seeds))
-            score = selection_score(summ)
+            score = selection_score(summ, cfg.selection_collision_cost)
             entry = {"num_timesteps": int(self.num_timesteps), "score": score, **summ}
             state["evaluations"].append(entry)
             for k in ("rms_slot_error_m", "return", "collisions", "reconfig_success_rate", "min_separation_m",

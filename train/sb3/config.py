@@ -18,6 +18,9 @@ used for scenarios without their own), in the style of the RL Baselines3 Zoo::
       checkpoint_freq: 100000       # checkpoint every this many env steps (0: never)
       reward_scale: 0.05            # rewards seen by the learner are multiplied by this (the curves
                                     # and evaluations report the unscaled env reward)
+      selection_collision_cost: 2.0 # model selection: each validation episode with a collision adds this
+                                    # / eval_episodes to the score (null, the default: any collision
+                                    # disqualifies the model)
 
 A ``--config FILE`` is the same format (a section keyed by the scenario, or a flat section) and is
 merged over the defaults key by key (``env_kwargs``, ``policy_kwargs`` and their sub-dicts merged
@@ -42,7 +45,8 @@ __all__ = ["ALGOS", "TrainConfig", "load_hyperparams", "make_env_config"]
 ALGOS = ("ppo", "sac", "td3")
 
 _TRAIN_KEYS = {"n_timesteps", "n_formations", "policy", "policy_kwargs", "env_kwargs", "eval_freq",
-               "eval_episodes", "checkpoint_freq", "torch_threads", "reward_scale", "init_policy", "action_guard"}
+               "eval_episodes", "checkpoint_freq", "torch_threads", "reward_scale", "init_policy", "action_guard",
+               "selection_collision_cost"}
 _ALGO_KEYS = {
     "ppo": {"learning_rate", "n_steps", "batch_size", "n_epochs", "gamma", "gae_lambda", "clip_range",
             "clip_range_vf", "normalize_advantage", "ent_coef", "vf_coef", "max_grad_norm", "use_sde",
@@ -239,6 +243,9 @@ class TrainConfig:
     # the separation guard (agents.separation_guard) filters the policy's set-point actions in training, in
     # validation and wherever the published policy is evaluated (its sidecar says so): part of the policy
     action_guard: bool | dict = False
+    # the model selection's price of a validation episode that ends in a collision or crash, in the selection
+    # score's units per episode (train.evaluation.summary.selection_score); None: any collision disqualifies
+    selection_collision_cost: float | None = None
 
     def __post_init__(self) -> None:
         from formation_env.scenarios import scenario_names
@@ -297,6 +304,11 @@ class TrainConfig:
             if get_scenario(self.scenario).safe_box_b is not None:
                 raise ValueError(f"action_guard: scenario {self.scenario!r} has a safe box, whose set-point ranges are not "
                                  "the guard's +-5 m (use action_guard: false)")
+        c = self.selection_collision_cost
+        if c is not None and (isinstance(c, bool) or not isinstance(c, (int, float)) or not math.isfinite(c)
+                              or not 0 <= c <= 1e3):
+            raise ValueError(f"selection_collision_cost must be null (a collision disqualifies) or a finite number in "
+                             f"[0, 1000], got {c!r}")
         if not 1 <= self.torch_threads <= 1024:
             raise ValueError(f"torch_threads must be in [1, 1024], got {self.torch_threads}")
         if not isinstance(self.policy, str) or self.policy not in POLICIES:
