@@ -8,7 +8,8 @@
 # converged wake with the same commands, sharing the two cores with evaluations and sweeps; issues 24/25: close_formation
 # and vee5 retrained with the saving weighted 8, now their recipes' value, the same commands; vee5_mappo retrained on the
 # converged wake with the same command: seeds 0 and 1 two at a time, seed 2 beside their held-out evaluation; vee5 retrained
-# with its recipe's 4M steps and decayed step size: seeds 0 and 1 two at a time, seed 2 beside them and their evaluation).
+# with its recipe's 4M steps and decayed step size: seeds 0 and 1 two at a time, seed 2 beside them and their evaluation;
+# vee5_mappo retrained with vee5's budget, step size and priced model selection: seeds 0 and 1 two at a time, seed 2 alone).
 # Usage: bash train/committed_runs.sh [RUNS_DIR]
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -25,7 +26,7 @@ jobs_list() {
     echo "wake_surfing 2000000 $seed"
     echo "wake_surfing_random_leader 2000000 $seed"
     echo "vee5 4000000 $seed"       # issue 25: the recipe's 4M steps with the step size decayed linearly
-    echo "vee5_mappo 2000000 $seed"   # vee5 with train/hyperparams/mappo.yml (the centralised critic)
+    echo "vee5_mappo 4000000 $seed"   # vee5 with train/hyperparams/mappo.yml (the centralised critic; vee5's budget)
     echo "echelon3 3000000 $seed"   # issue 25: the recipe's 3M steps with the step size decayed linearly
   done
 }
@@ -69,15 +70,9 @@ PYEOF
     fi
   done
 done
-# MAPPO: a run none of whose validations was free of collisions has no best model; its final model is published
+# MAPPO: its recipe prices a validation collision (selection_collision_cost), so every run has a best model
 for seed in 0 1 2; do
   run="$RUNS/vee5_mappo_seed${seed}"
   wall=$("$PY" -c "import json,sys; print(json.load(open(sys.argv[1]))['wall_s'])" "$run/summary.json")
-  if "$PY" -c "import json,math,sys; sys.exit(0 if math.isfinite(json.load(open(sys.argv[1]))['validation']['score']) else 1)" \
-      "$run/best_model.json"; then
-    "$PY" -m train.publish "$run" "vee5_mappo_setpoints_seed${seed}" --wall-s "$wall"
-  else
-    "$PY" -m train.publish "$run" "vee5_mappo_setpoints_seed${seed}" --wall-s "$wall" --model final \
-      --note "no validation of this run was free of collisions: the final model is published"
-  fi
+  "$PY" -m train.publish "$run" "vee5_mappo_setpoints_seed${seed}" --wall-s "$wall"
 done

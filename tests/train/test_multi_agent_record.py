@@ -73,3 +73,22 @@ def test_the_committed_vee_rotation_record_is_what_the_policy_flies():
     assert [e["rms_along_track_m"] for e in eps] == pytest.approx(cols["rms_along_track_m"][:2], rel=1e-3, abs=1e-6)
     for ctrl, summary in rec["summaries"].items():
         assert summary["reconfig_success_rate"] == pytest.approx(np.mean(rec["episodes"][ctrl]["reconfig_success"]))
+
+
+MAPPO_RECORD = POLICIES / "vee5_mappo_setpoints_levels.json"
+
+
+@pytest.mark.skipif(not MAPPO_RECORD.is_file(), reason="no committed MAPPO record")
+def test_the_committed_mappo_record_is_what_the_policy_flies_on_the_shared_ppo_episodes():
+    """The MAPPO record (issue 25, learner 2): two of its sigma-1 episodes flown again with the committed zip of seed 1
+    give the recorded harvest and formation saving; its keeper column is the shared-PPO record's episode for episode
+    (the same seeds and conditions, so the paired differences in docs/multi_agent.md pair the same episodes)."""
+    recs = json.loads(MAPPO_RECORD.read_text())["records"]["vee5"]
+    sigma1 = next(r["by_level"]["sigma_1"] for r in recs if "sigma_1" in r["by_level"])
+    _refly_two(sigma1, "vee5", "vee5_mappo_setpoints_seed1")
+    ppo = _sigma1_record(RECORD, "vee5")
+    assert sigma1["episodes"]["station_keeper"] == ppo["episodes"]["station_keeper"]
+    for k in range(3):
+        name = f"vee5_mappo_setpoints_seed{k}"
+        assert len(sigma1["episodes"][name]["harvest_ratio"]) == 100
+        assert sigma1["summaries"][name]["collisions"] == sum(sigma1["episodes"][name]["collision"])
