@@ -79,4 +79,3 @@ def test_the_committed_ppo_runs_select_the_same_models_under_the_priced_rule(nam
         (s_inf, at_inf), (s_2, at_2) = pick(None), pick(2.0)
         assert math.isfinite(s_inf) and at_inf == at_2
         assert side["num_timesteps"] == at_2
-
