@@ -31,7 +31,7 @@ def register(sub) -> None:
     from train.evaluation.evaluate import TEST_EPISODES
 
     from ..scenarios import scenario_names
-    from ..sim.config import TURBULENCE_FIELD_ALIASES, TURBULENCE_FIELDS
+    from ..sim.config import LEADER_REFERENCES, TURBULENCE_FIELD_ALIASES, TURBULENCE_FIELDS
     from ..wake.coupling import WAKE_FIDELITIES
 
     p = sub.add_parser("evaluate", help="evaluate policies against the PID baselines on held-out seeds (wake + turbulence)")
@@ -63,6 +63,10 @@ def register(sub) -> None:
                    help="the flight control's throttle ceiling for every UAV, 0.8..2 (default 1, the Aerosonde's full "
                         "throttle); above 1 a counterfactual engine, for measuring what thrust authority limits a "
                         "controller (a ceiling, not an aircraft)")
+    p.add_argument("--leader-reference", default=None, choices=LEADER_REFERENCES,
+                   help="how the leader's (vehicle 0's) reference moves (default: the scenario's; air in vee_rotation, "
+                        "ground elsewhere): ground (the thesis's: the trim speed over the ground, a fixed altitude) or "
+                        "air (carried along the track and vertically by the air the leader flies in)")
     p.add_argument("--benefit", action="store_true", help="also compute the ELL induced-drag saving (slow)")
     p.add_argument("--action-mode", default=None, choices=ACTION_MODES,
                    help="action mode of the zips when no sidecar JSON / config.yaml says it")
@@ -122,7 +126,7 @@ def run(args) -> int:
                               action_mode=args.action_mode, out_dir=out, overwrite=args.overwrite,
                               plots=not args.no_plots, duration_s=args.duration, turbulence_field=args.turbulence_field,
                               wake_fidelity=args.wake_fidelity, throttle_max=args.throttle_max,
-                              ablations=args.ablate or (), log=print, **({} if args.bootstrap_resamples is None else {"n_boot": args.bootstrap_resamples}))
+                              leader_reference=args.leader_reference, ablations=args.ablate or (), log=print, **({} if args.bootstrap_resamples is None else {"n_boot": args.bootstrap_resamples}))
         print(res["table_markdown"])
         print(f"wrote {out}/levels.md, levels.json and " + ", ".join(f"sigma_{v:g}/" for v in levels))
         return 0
@@ -130,7 +134,8 @@ def run(args) -> int:
                    turbulence_sigma_mps=levels[0], wake=not args.no_wake, compute_benefit=args.benefit,
                    action_mode=args.action_mode, out_dir=out, overwrite=args.overwrite, plots=not args.no_plots,
                    duration_s=args.duration, turbulence_field=args.turbulence_field, ablations=args.ablate or (),
-                   wake_fidelity=args.wake_fidelity, throttle_max=args.throttle_max, log=print,
+                   wake_fidelity=args.wake_fidelity, throttle_max=args.throttle_max,
+                   leader_reference=args.leader_reference, log=print,
                    **({} if args.bootstrap_resamples is None else {"n_boot": args.bootstrap_resamples}))
     print(rep["table_markdown"])
     if rep["comparison_markdown"]:

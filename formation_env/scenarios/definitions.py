@@ -122,6 +122,19 @@ class Scenario:
     # the neighbours an agent observes unless EnvConfig.neighbour_count says otherwise: 0 every other UAV in
     # index order (the observation grows with the formation); k the k nearest by slot (one size for any formation)
     neighbour_count: int = 0
+    # vehicle 0's own offset from the reference (x forward, z down; spans) over time, or None: a formation whose
+    # leader drops back (vee_rotation: the lead handed over by the leader slowing, as geese do, rather than by the
+    # others outrunning it). Along the track and vertical only: a lateral rate would turn the demanded track that
+    # the followers' slots are expressed along. Not with randomised leader manoeuvres (their path is integrated)
+    leader_schedule: SlotSchedule | None = None
+    # False: vehicle 0's reference runs at the trim speed over the ground at a fixed altitude (the thesis's; in
+    # turbulence the leader chasing it spends its whole throttle for tens of seconds against a sustained downdraft
+    # and then the followers cannot gain on it). True: the reference is carried along the track and vertically by
+    # the air vehicle 0 flies in (the north and down wind at it added to its velocity, integrated on the physics
+    # grid): a leader that holds its airspeed and flies level in the air mass, trading height with a downdraft as
+    # a total-energy control does at full throttle, instead of fighting it. The followers' slots hang off vehicle
+    # 0's actual position either way. Not with randomised leader manoeuvres
+    leader_air_relative: bool = False
 
     def __post_init__(self) -> None:
         if not self.name or not isinstance(self.name, str):
@@ -145,6 +158,15 @@ class Scenario:
             raise ValueError(f"Scenario.slot_frame must be 'leader_demand' or 'leader_track', got {self.slot_frame!r}")
         if not all(isinstance(s, SlotSchedule) for s in self.slots):
             raise ValueError("Scenario.slots must be SlotSchedule instances")
+        if not isinstance(self.leader_air_relative, bool):
+            raise ValueError(f"Scenario.leader_air_relative must be True or False, got {self.leader_air_relative!r}")
+        if self.leader_schedule is not None:
+            if not isinstance(self.leader_schedule, SlotSchedule):
+                raise ValueError(f"Scenario.leader_schedule must be a SlotSchedule or None, got {self.leader_schedule!r}")
+            lateral = [off[1] for _, off in self.leader_schedule.keyframes if off[1] != 0.0]
+            if lateral:
+                raise ValueError(f"Scenario.leader_schedule must keep the lateral offset 0 (along the track and vertical "
+                                 f"only), got y = {lateral[0]!r} spans")
         if not all(isinstance(g, TransientGust) for g in self.gusts):
             raise ValueError("Scenario.gusts must be TransientGust instances")
         ref = tuple(float(v) for v in self.reference_offset_ned)
@@ -186,24 +208,33 @@ class Scenario:
         return int(round(self.duration_s / self.dt))
 
     def start_position_ned(self) -> np.ndarray:
-        """(V, 3) start positions: vehicle 0 at (0, 0, -altitude), followers in their first slot
-        (vehicle 0 flies north at the start)."""
+        """(V, 3) start positions: vehicle 0 at (0, 0, -altitude) plus its own schedule's first offset, followers in
+        their first slot from it (vehicle 0 flies north at the start)."""
         p = np.zeros((self.n_vehicles, 3))
         p[:, 2] = -self.altitude_m
+        if self.leader_schedule is not None:
+            p += self.leader_schedule.offset_and_rate(0.0)[0]
         for i, s in enumerate(self.slots):
             p[i + 1] += s.offset_and_rate(0.0)[0]
         return p
 
     def reference(self, t_s) -> tuple[np.ndarray, np.ndarray]:
-        """Vehicle 0's demanded position and velocity (NED) at ``t_s``: straight and level, north.
+        """Vehicle 0's demanded position and velocity (NED) at ``t_s``: straight and level, north, plus its own
+        schedule's offset and rate (``leader_schedule``; the track is north, so x is north and z down). In still
+        air; an air-relative leader's (``leader_air_relative``) is further carried by the wind it meets.
         An array of times gives arrays of shape t.shape + (3,)."""
         if np.ndim(t_s) > 0:
             t = np.asarray(t_s, dtype=float)
             pos = np.stack([self.airspeed_mps * t, np.zeros_like(t), np.full_like(t, -self.altitude_m)], axis=-1)
             vel = np.broadcast_to(np.array([self.airspeed_mps, 0.0, 0.0]), t.shape + (3,)).copy()
-            return pos + np.asarray(self.reference_offset_ned), vel
-        pos = np.array([self.airspeed_mps * t_s, 0.0, -self.altitude_m]) + np.asarray(self.reference_offset_ned)
-        return pos, np.array([self.airspeed_mps, 0.0, 0.0])
+            pos = pos + np.asarray(self.reference_offset_ned)
+        else:
+            pos = np.array([self.airspeed_mps * t_s, 0.0, -self.altitude_m]) + np.asarray(self.reference_offset_ned)
+            vel = np.array([self.airspeed_mps, 0.0, 0.0])
+        if self.leader_schedule is not None:
+            off, rate = self.leader_schedule.offset_and_rate(t_s)
+            pos, vel = pos + off, vel + rate
+        return pos, vel
 
     def ambient_wind_ned(self, t_s) -> np.ndarray:
         """Ambient (gust) wind, NED m/s, at ``t_s`` (scalar -> (3,), array -> t.shape + (3,))."""

@@ -28,6 +28,9 @@ _WEIGHT = (0.0, 1e4, "", "a reward weight: non-negative and bounded, so a decisi
 
 #: every numeric option: "Owner.name" -> (min, max, unit, why); min and max inclusive. For a 25 m/s,
 #: 2.9 m span UAV (the Aerosonde) at 1000 m, physics at 50 Hz.
+#: how vehicle 0's reference moves (EnvConfig.leader_reference): over the ground (the thesis's) or with the air
+LEADER_REFERENCES = ("ground", "air")
+
 OPTION_RANGES: dict[str, tuple[float, float, str, str]] = {
     "EnvConfig.control_hz": (0.5, 50.0, "Hz", "decision rate; must also divide the physics rate (50 Hz): at most one "
                              "decision per physics step, at least one every 2 s (100 physics steps)"),
@@ -313,6 +316,11 @@ class EnvConfig:
         throttle). Above 1 the engine's manifold pressure passes ambient and the AeroSim engine map is extrapolated:
         not an aircraft but a counterfactual with more thrust, for measuring what thrust authority limits a
         controller (docs/close_formation.md, "Ceilings").
+    leader_reference: how vehicle 0's reference moves (:data:`LEADER_REFERENCES`): "ground" (the thesis's: at the
+        trim speed over the ground at a fixed altitude) or "air" (carried along the track and vertically by the air
+        vehicle 0 flies in: a leader that holds its airspeed and flies level in the air mass;
+        :attr:`formation_env.scenarios.Scenario.leader_air_relative`); None (default): the scenario's ("air" in
+        vee_rotation, "ground" elsewhere). Not with randomised leader manoeuvres.
     neighbour_count: the other UAVs each agent observes (the ``neighbours`` group): 0 every other UAV in index
         order (6 (V - 1) values: the size grows with the formation); k >= 1 the k whose slots are nearest the
         agent's, nearest first (6 k values whatever the formation's size, so one policy flies an echelon of 3,
@@ -335,6 +343,7 @@ class EnvConfig:
     wake_fidelity: str | None = None
     neighbour_count: int | None = None
     throttle_max: float = 1.0
+    leader_reference: str | None = None
     reward: RewardWeights = field(default_factory=RewardWeights)
     randomisation: Randomisation = field(default_factory=Randomisation)
 
@@ -390,6 +399,10 @@ class EnvConfig:
             if not isinstance(self.wake_fidelity, str) or self.wake_fidelity not in WAKE_FIDELITIES:
                 raise ValueError(f"EnvConfig: wake_fidelity must be None (the scenario's) or one of {WAKE_FIDELITIES}, "
                                  f"got {self.wake_fidelity!r}")
+        if self.leader_reference is not None and (not isinstance(self.leader_reference, str)
+                                                  or self.leader_reference not in LEADER_REFERENCES):
+            raise ValueError(f"EnvConfig: leader_reference must be None (the scenario's) or one of {LEADER_REFERENCES}, "
+                             f"got {self.leader_reference!r}")
         if self.neighbour_count is not None:
             k = self.neighbour_count
             if isinstance(k, (bool, np.bool_)) or not isinstance(k, (int, np.integer)) or not 0 <= k <= 64:

@@ -19,7 +19,8 @@ from ..frames import track_to_ned_xy
 from .observe import signed_log
 from .params import ACCEL_MPS2, CLIMB_RATE_MPS, TURN_RATE_RAD_S
 
-__all__ = ["reference_path", "slot_offset_and_rate", "formation_demands", "gust_wind_ned", "schedule_features"]
+__all__ = ["reference_path", "slot_offset_and_rate", "formation_demands", "gust_shape", "gust_wind_ned",
+           "leader_wind", "schedule_features"]
 
 _jit = nb.njit(cache=True, error_model="numpy")
 
@@ -30,7 +31,8 @@ def reference_path(sc, t, ref_pos, manoeuvre, out_pos, out_vel):
     trim speed, or, with randomised manoeuvres, the integrated path ``ref_pos`` turning, climbing
     and changing speed at fixed rates from manoeuvre = (start s, heading change rad, altitude change
     m, speed change m/s, base speed offset m/s): the speed is the scenario's plus the episode's base
-    offset (from the start) plus the manoeuvre's change."""
+    offset (from the start) plus the manoeuvre's change. A scenario with a leader schedule adds vehicle 0's
+    own offset and rate to the straight path (never with manoeuvres: the Simulation refuses the pair)."""
     if sc.manoeuvres:
         tau = max(0.0, t - manoeuvre[0])
         dpsi, dh, dv = manoeuvre[1], manoeuvre[2], manoeuvre[3]
@@ -42,6 +44,15 @@ def reference_path(sc, t, ref_pos, manoeuvre, out_pos, out_vel):
         out_vel[0] = speed * math.cos(psi)
         out_vel[1] = speed * math.sin(psi)
         out_vel[2] = -climb
+        return
+    if sc.slot_keyframes[0] > 0:
+        # vehicle 0's own schedule (Scenario.leader_schedule: a leader dropping back), staged in the outputs; the
+        # track is north, so its x is north and z down (its y is 0 by construction)
+        slot_offset_and_rate(sc, 0, t, out_pos, out_vel)
+        out_pos[0] = (sc.airspeed_mps * t + sc.reference_offset_ned[0]) + out_pos[0]
+        out_pos[1] = (0.0 + sc.reference_offset_ned[1]) + out_pos[1]
+        out_pos[2] = (-sc.altitude_m + sc.reference_offset_ned[2]) + out_pos[2]
+        out_vel[0] = sc.airspeed_mps + out_vel[0]
         return
     out_pos[0] = sc.airspeed_mps * t + sc.reference_offset_ned[0]
     out_pos[1] = 0.0 + sc.reference_offset_ned[1]
@@ -107,31 +118,49 @@ def formation_demands(sc, t, x, vel_ned, ref_pos, manoeuvre, jitter, out_pd, out
 
 
 @_jit
+def gust_shape(a, t):
+    """Gust ``a`` = (amplitude N, E, D, start, rise, hold, decay)'s shape at t: raised-cosine onset, hold, decay."""
+    tau_up = min(1.0, max(0.0, (t - a[3]) / a[4]))
+    tau_dn = min(1.0, max(0.0, (t - (a[3] + a[4] + a[5])) / a[6]))
+    return 0.5 * (1.0 - math.cos(math.pi * tau_up)) * 0.5 * (1.0 + math.cos(math.pi * tau_dn))
+
+
+@_jit
 def gust_wind_ned(sc, t, out):
     """The scenario's transient gusts (thesis section 6.4: raised-cosine onset, hold, decay) at t."""
     for i in range(3):
         out[i] = 0.0
     for g in range(sc.gusts.shape[0]):
         a = sc.gusts[g]
-        tau_up = min(1.0, max(0.0, (t - a[3]) / a[4]))
-        tau_dn = min(1.0, max(0.0, (t - (a[3] + a[4] + a[5])) / a[6]))
-        shape = 0.5 * (1.0 - math.cos(math.pi * tau_up)) * 0.5 * (1.0 + math.cos(math.pi * tau_dn))
+        shape = gust_shape(a, t)
         for i in range(3):
             out[i] += shape * a[i]
+
+
+@_jit
+def leader_wind(sc, steady_wind, gust_ned0, t, k):
+    """Component k (NED) of the ambient wind at vehicle 0 at t (m/s): the scenario's gusts, the steady wind and the
+    turbulence there. An air-relative leader's reference (Scenario.leader_air_relative) is carried by its north
+    (along the track: the reference flies north) and down components."""
+    w = 0.0
+    for g in range(sc.gusts.shape[0]):
+        w += gust_shape(sc.gusts[g], t) * sc.gusts[g, k]
+    return w + steady_wind[k] + gust_ned0[k]
 
 
 @_jit
 def schedule_features(sc, t, jitter, out):
     """(V, 10) each follower's slot schedule as observed: offset now (spans, track frame), its rate
     (slog 1 m/s), next keyframe's offset minus the current one (spans), time to the next keyframe
-    (min(dt, 10 s) / 10; 1 when none is left). Vehicle 0: zeros and 1."""
+    (min(dt, 10 s) / 10; 1 when none is left). Vehicle 0: its own schedule's (from the reference) if the
+    scenario gives it one, else zeros and 1."""
     span = sc.span_m
     off = out[0, 0:3].copy()
     rate = out[0, 3:6].copy()
     for i in range(10):
         out[0, i] = 0.0
     out[0, 9] = 1.0
-    for j in range(1, out.shape[0]):
+    for j in range(0 if sc.slot_keyframes[0] > 0 else 1, out.shape[0]):
         slot_offset_and_rate(sc, j, t, off, rate)
         n = sc.slot_keyframes[j]
         nxt = n

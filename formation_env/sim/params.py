@@ -66,13 +66,14 @@ class ScenarioArrays(NamedTuple):
     airspeed_mps: float
     altitude_m: float
     reference_offset_ned: np.ndarray  # (3,) m
-    slot_times_s: np.ndarray  # (V, K) keyframe times (row 0 unused), padded with +inf
+    slot_times_s: np.ndarray  # (V, K) keyframe times (row 0: vehicle 0's own schedule, if any), padded with +inf
     slot_offsets_m: np.ndarray  # (V, K, 3) keyframe offsets, track frame, m
-    slot_keyframes: np.ndarray  # (V,) int64 keyframes per follower (0 for vehicle 0)
+    slot_keyframes: np.ndarray  # (V,) int64 keyframes per UAV (vehicle 0: 0 unless Scenario.leader_schedule)
     span_m: float  # slot spans are measured in this (the follower's schedule span), m
     slot_along_leader_demand: bool  # slot offsets along vehicle 0's demanded (True) or measured track
     gusts: np.ndarray  # (G, 7) amplitude N, E, D m/s, start, rise, hold, decay s
     manoeuvres: bool  # randomised leader manoeuvres on
+    leader_air_relative: bool  # vehicle 0's reference carried by the air (Scenario.leader_air_relative)
 
 
 class ActionParams(NamedTuple):
@@ -214,25 +215,31 @@ def aircraft_arrays(params=AEROSONDE, options=DEFAULT_OPTIONS, limits=DEFAULT_LI
                           atm_P=atm_p, atm_rho=atm_rho, atm_a=atm_a, limits=pack_limits(limits))
 
 
-def scenario_arrays(sc, manoeuvres: bool) -> ScenarioArrays:
+def scenario_arrays(sc, manoeuvres: bool, leader_air_relative: bool | None = None) -> ScenarioArrays:
+    """The scenario packed for the kernels; ``leader_air_relative`` None: the scenario's."""
     v = sc.n_vehicles
-    k = max([len(s.keyframes) for s in sc.slots] + [1])
+    # row 0: vehicle 0's own schedule (Scenario.leader_schedule; 0 keyframes without one), rows 1..: the followers'
+    schedules = ((sc.leader_schedule,) if sc.leader_schedule is not None else (None,)) + tuple(sc.slots)
+    k = max([len(s.keyframes) for s in schedules if s is not None] + [1])
     times = np.full((v, k), np.inf)
     offs = np.zeros((v, k, 3))
     count = np.zeros(v, dtype=np.int64)
     span = sc.slots[0].span_m if sc.slots else AEROSONDE_SPAN_M
-    for j, slot in enumerate(sc.slots):
+    for j, slot in enumerate(schedules):
+        if slot is None:
+            continue
         kf = slot.keyframes
-        count[j + 1] = len(kf)
+        count[j] = len(kf)
         for m, (t, off) in enumerate(kf):
-            times[j + 1, m] = t
-            offs[j + 1, m] = np.asarray(off) * slot.span_m
+            times[j, m] = t
+            offs[j, m] = np.asarray(off) * slot.span_m
     gusts = np.array([[*g.amplitude_ned, g.start_s, g.rise_s, g.hold_s, g.decay_s] for g in sc.gusts]).reshape(-1, 7)
     return ScenarioArrays(airspeed_mps=float(sc.airspeed_mps), altitude_m=float(sc.altitude_m),
                           reference_offset_ned=np.asarray(sc.reference_offset_ned, float), slot_times_s=times,
                           slot_offsets_m=offs, slot_keyframes=count, span_m=float(span),
                           slot_along_leader_demand=sc.slot_frame == "leader_demand", gusts=gusts,
-                          manoeuvres=bool(manoeuvres))
+                          manoeuvres=bool(manoeuvres), leader_air_relative=bool(sc.leader_air_relative if leader_air_relative is None
+                                                                   else leader_air_relative))
 
 
 def safe_box_arrays(sc) -> tuple[np.ndarray, np.ndarray]:

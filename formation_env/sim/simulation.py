@@ -132,6 +132,14 @@ class Simulation:
         alone = isolated_model(vehicle, wc.core, wc.eval_points, wc.rotational, lattice.kinematic_viscosity,
                                wc.viscous_aic)
         rnd, w = config.randomisation, config.reward
+        # vehicle 0's reference carried by the air (EnvConfig.leader_reference, else the scenario's)
+        self.leader_air_relative = (sc.leader_air_relative if config.leader_reference is None
+                                    else config.leader_reference == "air")
+        if (sc.leader_schedule is not None or self.leader_air_relative) and rnd.any_manoeuvre:
+            raise ValueError(f"scenario {sc.name!r} with its leader's reference set here (a Scenario.leader_schedule, or "
+                             f"carried by the air: Scenario.leader_air_relative / EnvConfig.leader_reference 'air') cannot "
+                             f"take a randomised leader manoeuvre or speed offset, which would replace it: leader_turn_deg, "
+                             f"leader_climb_m, leader_speed_mps and the speed offsets must be 0 for it")
         sigma = rnd.turbulence_sigma_mps
         self.params = StepParams(
             dt_s=float(sc.dt), substeps=self.substeps, episode_steps=self.n_steps,
@@ -139,7 +147,8 @@ class Simulation:
             turbulence=0 if sigma <= 0 else TURBULENCE_CODES[config.turbulence_field],
             benefit_on=bool((config.compute_benefit or w.benefit > 0) and self.wake_model is not None),
             aircraft=aircraft_arrays(), wake=wake_arrays(lattice, self.wing_origin_body),
-            wake_alone=wake_arrays(alone, self.wing_origin_body), scenario=scenario_arrays(sc, rnd.any_manoeuvre),
+            wake_alone=wake_arrays(alone, self.wing_origin_body),
+            scenario=scenario_arrays(sc, rnd.any_manoeuvre, self.leader_air_relative),
             fcs=fcs_params(fc, sc.dt), action=self._action_params(config), reward=self._reward_params(config),
             field=turbulence_params(sc, sigma, config.turbulence_field), trim_airspeed_mps=float(sc.airspeed_mps),
             coupling=coupling_arrays(lattice, self.wake_coupling, AEROSONDE), neighbour_count=self.neighbour_count)
@@ -228,7 +237,8 @@ class Simulation:
                                   math.radians(rng.uniform(-rnd.leader_turn_deg, rnd.leader_turn_deg)),
                                   rng.uniform(-rnd.leader_climb_m, rnd.leader_climb_m),
                                   rng.uniform(-rnd.leader_speed_mps, rnd.leader_speed_mps)]
-            s.reference_position[i] = sc.reference(0.0)[0]
+            # the manoeuvring path's start, or an air-relative leader's air displacement (none yet)
+            s.reference_position[i] = 0.0 if self.leader_air_relative else sc.reference(0.0)[0]
             if rnd.turbulence_sigma_mps > 0:
                 field_seeds.append(int(rng.integers(2**63 - 1)))
                 # drawn only with a spread, so that every other configuration keeps its seeds' episodes

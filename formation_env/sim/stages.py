@@ -32,7 +32,7 @@ from ..control.law import N_CSTATE, fcs_update
 from ..frames import quaternion_dcm_terms, track_to_ned_xy
 from ..wake.arrays import evaluate_formation
 from ..wake.benefit import AIR_DENSITY_SL, induced_drag_saving_one
-from .guidance import formation_demands, gust_wind_ned, reference_path, schedule_features
+from .guidance import formation_demands, gust_wind_ned, leader_wind, reference_path, schedule_features
 from .kernels import ell_inputs, min_separation_each, position_finite, separation_each_known, step_one, step_separation
 from .observe import box_depth_each, observe_formation, reward_formation, slot_error
 from .params import RESIDUAL, SETPOINTS, SURFACES
@@ -144,6 +144,13 @@ def demands(scenario, s, b, t, vel):
     ground_velocity_ned(s.aircraft[b], vel)
     formation_demands(scenario, t, s.aircraft[b], vel, s.reference_position[b], s.manoeuvre[b], s.slot_jitter[b],
                       s.position_demand[b], s.velocity_demand[b])
+    if scenario.leader_air_relative:
+        # an air-relative leader: its reference is carried along the track and vertically by the air it flies in
+        # (the wind at it now, and the distance that wind has carried it, s.reference_position[b, 0 and 2]); the
+        # followers' slots hang off vehicle 0's actual position and track direction, which this leaves as they were
+        for k in (0, 2):
+            s.position_demand[b, 0, k] += s.reference_position[b, k]
+            s.velocity_demand[b, 0, k] += leader_wind(scenario, s.steady_wind[b], s.gust_ned[b, 0], t, k)
 
 
 @_jit
@@ -302,11 +309,15 @@ def advance_turbulence(turbulence, field, s, b, fs):
 @_jit_inline
 def integrate_reference(scenario, dt_s, s, b, t, pd, vd):
     """The manoeuvring reference path of formation b integrated one step dt_s from time t (on the
-    physics grid; nothing without manoeuvres). pd, vd (3,): scratch."""
+    physics grid), or an air-relative leader's along-track and vertical air displacement (with the wind at the state of
+    t + dt_s, which the turbulence was just advanced to); nothing otherwise. pd, vd (3,): scratch."""
     if scenario.manoeuvres:
         reference_path(scenario, t, s.reference_position[b], s.manoeuvre[b], pd, vd)
         for k in range(3):
             s.reference_position[b, k] += dt_s * vd[k]
+    elif scenario.leader_air_relative:  # the distance the air has carried the leader's reference, north and down
+        for k in (0, 2):
+            s.reference_position[b, k] += dt_s * leader_wind(scenario, s.steady_wind[b], s.gust_ned[b, 0], t + dt_s, k)
 
 
 @_jit

@@ -35,7 +35,8 @@ class SimState(NamedTuple):
     steady_wind: np.ndarray  # (B, 3) per-episode steady wind, m/s NED
     manoeuvre: np.ndarray  # (B, 5) leader manoeuvre: start s, heading change rad, altitude change m, speed change m/s,
     #                        and the episode's base speed offset m/s (flown from the start)
-    reference_position: np.ndarray  # (B, 3) integrated manoeuvring reference path position, m NED
+    reference_position: np.ndarray  # (B, 3) integrated manoeuvring reference path position, m NED; for an
+    # air-relative leader (Scenario.leader_air_relative) the distance north (x) and down (z), m, the air has carried its reference
     gust_ned: np.ndarray  # (B, V, 3) turbulence at each UAV now, m/s NED
     gust_omega_body: np.ndarray  # (B, V, 3) rotational gusts at each UAV now (p_g, -q_g, -r_g), rad/s body
     field: FrozenFieldState  # the lanes of the formation's turbulence (lanes or independent streams)

@@ -140,7 +140,11 @@ def slot_schedule_features(scenario, time_s, slot_jitter):
     out = np.zeros((b, v, 10))
     out[..., 9] = 1.0
     t = np.asarray(time_s, float)
-    for j, slot in enumerate(scenario.slots):
+    schedules = ((scenario.leader_schedule,) if scenario.leader_schedule is not None else (None,)) + tuple(scenario.slots)
+    for j1, slot in enumerate(schedules):
+        if slot is None:  # vehicle 0 without its own schedule: zeros and 1
+            continue
+        j = j1 - 1
         off, rate = slot.offset_and_rate(t)
         off = off + slot_jitter[:, j + 1]
         times = np.array([k[0] for k in slot.keyframes])

@@ -102,3 +102,93 @@ def test_station_keeper_rotates_a_calm_vee_and_pid_cannot():
     pid = load_policy("pid")
     (m,) = run_episodes(pid, eval_env_config("vee_rotation", pid.action_mode, turbulence_sigma_mps=0.0), [7200000001])
     assert not m["reconfig_success"]
+
+
+def test_the_leader_drops_back_so_that_no_uav_outruns_the_reference():
+    """The lead is handed over by vehicle 0 slowing (Scenario.leader_schedule), not by the others outrunning it:
+    vehicle 1 (the new apex) holds its place along the track and its height in the reference's frame, every UAV's
+    demanded ground speed stays at or below the 25 m/s reference at every time (the others only slow or hold), the
+    leader drops back 6 spans on the forward phase's blend, and it starts and ends at the reference's speed."""
+    sc = get_scenario("vee_rotation")
+    t = np.arange(0.0, sc.duration_s + 1e-9, 0.01)
+    ref_pos, ref_vel = sc.reference(t)
+    base = np.stack([sc.airspeed_mps * t, np.zeros_like(t), np.full_like(t, -sc.altitude_m)], axis=-1)
+    lead_off = ref_pos - base
+    np.testing.assert_allclose(lead_off[:, 1], 0.0, atol=0)
+    assert lead_off[-1, 0] == pytest.approx(-6.0 * SPAN) and lead_off[0, 0] == 0.0
+    np.testing.assert_allclose(ref_vel[[0, -1]], [[sc.airspeed_mps, 0, 0]] * 2, atol=1e-12)
+    speeds = [ref_vel[:, 0]] + [ref_vel[:, 0] + s.offset_and_rate(t)[1][:, 0] for s in sc.slots]
+    assert max(np.max(v) for v in speeds) <= sc.airspeed_mps + 1e-9
+    assert np.min(ref_vel[:, 0]) == pytest.approx(sc.airspeed_mps - 0.5 * np.pi * 6.0 * SPAN / 25.0, rel=1e-4)
+    v1 = lead_off + sc.slots[0].offset_and_rate(t)[0]  # vehicle 1 from the reference point
+    np.testing.assert_allclose(v1[:, [0, 2]], np.broadcast_to(v1[0, [0, 2]], (len(t), 2)), atol=1e-9)
+
+
+def test_the_compiled_reference_and_schedule_features_equal_the_scenarios():
+    """The kernel's vehicle-0 path with the leader's schedule (guidance.reference_path) equals Scenario.reference,
+    and the observed schedule features of every UAV, vehicle 0's own included, equal the numpy definition
+    (tests/oracles), over the whole episode."""
+    from formation_env.sim.guidance import reference_path, schedule_features
+    from formation_env.sim.params import scenario_arrays
+    from tests.oracles.env_step import slot_schedule_features
+
+    sc = get_scenario("vee_rotation")
+    arr = scenario_arrays(sc, False)
+    assert arr.slot_keyframes[0] == len(sc.leader_schedule.keyframes)
+    times = np.arange(0.0, sc.duration_s + 1.0, 0.37)
+    jitter = np.random.default_rng(4).normal(0.0, 0.3, (5, 3))
+    jitter[0] = 0.0
+    ref = slot_schedule_features(sc, times, np.broadcast_to(jitter, (len(times), 5, 3)))
+    pos, vel = np.empty(3), np.empty(3)
+    for k, t in enumerate(times):
+        reference_path(arr, t, np.zeros(3), np.zeros(5), pos, vel)
+        p_ref, v_ref = sc.reference(t)
+        np.testing.assert_allclose(pos, p_ref, rtol=0, atol=1e-9)
+        np.testing.assert_allclose(vel, v_ref, rtol=0, atol=1e-12)
+        out = np.zeros((5, 10))
+        schedule_features(arr, t, jitter, out)
+        np.testing.assert_allclose(out, ref[k], rtol=0, atol=1e-12)
+    assert np.any(ref[:, 0, 3] != 0.0)  # vehicle 0 observes its own drop-back
+
+
+def test_a_leader_schedule_is_checked():
+    """Bad leader schedules get one clear error: a lateral offset, and randomised leader manoeuvres beside it."""
+    from formation_env.scenarios import Scenario
+    from formation_env.sim.config import Randomisation
+
+    with pytest.raises(ValueError, match="lateral offset 0"):
+        Scenario("x", "x", 10.0, slots=(SlotSchedule(),), leader_schedule=SlotSchedule(((0.0, (0.0, 0.5, 0.0)),)))
+    with pytest.raises(ValueError, match="leader_schedule"):
+        formation_env.parallel_env("vee_rotation", randomisation=Randomisation(leader_speed_mps=1.0))
+
+
+def test_an_air_relative_leaders_reference_moves_with_the_air():
+    """vee_rotation's leader is air-relative (Scenario.leader_air_relative): its demanded velocity is the still-air
+    reference's plus the north and down wind at it, and its demanded position the still-air reference's plus the
+    air's integrated displacement (backward Euler on the 50 Hz grid), east as the still-air path; in calm air exactly
+    the still-air path."""
+    from formation_env.sim import Simulation
+    from formation_env.sim.config import Randomisation
+
+    sc = get_scenario("vee_rotation")
+    assert sc.leader_air_relative
+    for sigma in (1.0, 0.0):
+        sim = Simulation(EnvConfig(scenario="vee_rotation", action_mode="setpoints", learning="all",
+                                   randomisation=Randomisation(turbulence_sigma_mps=sigma)), batch_size=2)
+        sim.reset(seeds=[5, 6])
+        for k in range(40):
+            sim.step(np.zeros((2, 5, 4)))
+            t = sim.time_s
+            ref_pos, ref_vel = sc.reference(t[0])
+            wind = sim.state.steady_wind + sim.state.gust_ned[:, 0]
+            carried = sim.state.reference_position
+            for ax in (0, 2):
+                np.testing.assert_allclose(sim.state.velocity_demand[:, 0, ax], ref_vel[ax] + wind[:, ax], rtol=0, atol=1e-12)
+                np.testing.assert_allclose(sim.state.position_demand[:, 0, ax], ref_pos[ax] + carried[:, ax], rtol=0,
+                                           atol=1e-9)
+            np.testing.assert_allclose(sim.state.position_demand[:, 0, 1], ref_pos[1], rtol=0, atol=1e-12)
+            np.testing.assert_allclose(sim.state.velocity_demand[:, 0, 1], ref_vel[1], rtol=0, atol=1e-12)
+        if sigma == 0.0:
+            assert np.all(carried == 0.0)
+        else:  # ~8 s in a 1 m/s field: the air has carried the reference a measurable distance
+            assert np.all(np.abs(carried[:, [0, 2]]) > 0.05), carried

@@ -28,7 +28,8 @@ DEFAULT_TURBULENCE_SIGMA_MPS = 1.0  # the test set's Dryden level (scenarios wit
 
 def eval_env_config(scenario: str, action_mode: str, *, turbulence_sigma_mps: float | None = None, wake: bool = True,
                     control_hz: float = 10.0, compute_benefit: bool = False, duration_s: float | None = None,
-                    turbulence_field: str | None = None, wake_fidelity: str | None = None, throttle_max: float = 1.0):
+                    turbulence_field: str | None = None, wake_fidelity: str | None = None, throttle_max: float = 1.0,
+                    leader_reference: str | None = None):
     """The evaluation episodes' EnvConfig: the thesis scenario with wake and turbulence on (``turbulence_field``
     None: the env's default field, one frozen von Karman field per formation). With
     its defaults (sigma 1 m/s, wake on, the scenario's duration, no other randomisation than the task's
@@ -38,7 +39,9 @@ def eval_env_config(scenario: str, action_mode: str, *, turbulence_sigma_mps: fl
     reward, with the benefit on, at ``turbulence_sigma_mps`` (None: the preset's level). ``wake_fidelity`` None: the
     scenario's (formation_env.sim.formation.WAKE_FIDELITIES; a record flown before a task changed fidelity is re-flown
     with the fidelity it records). ``throttle_max``: the flight control's throttle ceiling (1: the Aerosonde's; above 1
-    the counterfactual engine of the ceiling measurements, :class:`formation_env.envs.config.EnvConfig`)."""
+    the counterfactual engine of the ceiling measurements, :class:`formation_env.envs.config.EnvConfig`).
+    ``leader_reference``: "ground" or "air" (how vehicle 0's reference moves, EnvConfig.leader_reference); None the
+    scenario's."""
     from formation_env.envs.config import EnvConfig, Randomisation
     from formation_env.tasks import task_for_scenario, task_learning, task_options
 
@@ -53,7 +56,8 @@ def eval_env_config(scenario: str, action_mode: str, *, turbulence_sigma_mps: fl
         task["compute_benefit"] = True
         return EnvConfig(scenario=scenario, learning=task_learning(scenario), action_mode=action_mode, wake=wake,
                          control_hz=control_hz, duration_s=duration_s, turbulence_field=turbulence_field,
-                         wake_fidelity=wake_fidelity, throttle_max=throttle_max, randomisation=rnd, **task)
+                         wake_fidelity=wake_fidelity, throttle_max=throttle_max, leader_reference=leader_reference,
+                         randomisation=rnd, **task)
     if turbulence_sigma_mps is None:
         turbulence_sigma_mps = DEFAULT_TURBULENCE_SIGMA_MPS
     t = task_for_scenario(scenario)
@@ -62,7 +66,7 @@ def eval_env_config(scenario: str, action_mode: str, *, turbulence_sigma_mps: fl
     compute_benefit = compute_benefit or (t is not None and t.reference is not None)
     return EnvConfig(scenario=scenario, learning=task_learning(scenario), action_mode=action_mode, wake=wake, control_hz=control_hz,
                      compute_benefit=compute_benefit, duration_s=duration_s, turbulence_field=turbulence_field,
-                     wake_fidelity=wake_fidelity, throttle_max=throttle_max,
+                     wake_fidelity=wake_fidelity, throttle_max=throttle_max, leader_reference=leader_reference,
                      randomisation=Randomisation(turbulence_sigma_mps=turbulence_sigma_mps, **extra))
 
 

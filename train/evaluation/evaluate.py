@@ -97,7 +97,8 @@ def evaluate(policies: Sequence[str], *, scenario: str, episodes: int = TEST_EPI
              action_mode: str | None = None, out_dir: str | Path | None = None, overwrite: bool = False,
              plots: bool = True, duration_s: float | None = None, groups: dict[str, Sequence[str]] | None = None,
              turbulence_field: str | None = None, ablations: Sequence[str | Sequence[str]] = (),
-             wake_fidelity: str | None = None, throttle_max: float = 1.0, n_boot: int = N_BOOT,
+             wake_fidelity: str | None = None, throttle_max: float = 1.0, leader_reference: str | None = None,
+             n_boot: int = N_BOOT,
              log: Callable[[str], None] | None = None) -> dict:
     """Evaluate ``policies`` ("pid", "pid_formation", SB3 zips or RLlib checkpoints) on the same held-out
     episodes (``episodes`` seeds from ``TEST_SEED_BASE``, or from ``seeds[0]``, or exactly ``seeds`` when
@@ -106,7 +107,8 @@ def evaluate(policies: Sequence[str], *, scenario: str, episodes: int = TEST_EPI
     entry like ``"induced_wind,induced_rotation"``; every learned policy is also flown with each hidden
     (:mod:`train.evaluation.ablation`, named ``<policy>-without-<groups>``) on the same episodes. ``throttle_max``: the
     flight control's throttle ceiling (above 1 the counterfactual engine of a ceiling measurement; the report records
-    it then).
+    it then). ``leader_reference``: "ground" or "air", how vehicle 0's reference moves (None: the scenario's; the report
+    records a choice).
 
     The report: ``policies.<name>.summary`` / ``.episodes`` (see :func:`summarise`), ``comparisons``
     (:func:`comparisons`: every policy against each baseline evaluated with it), ``groups`` (seed groups:
@@ -125,7 +127,8 @@ def evaluate(policies: Sequence[str], *, scenario: str, episodes: int = TEST_EPI
     if duration_s is not None and not (isinstance(duration_s, (int, float)) and math.isfinite(duration_s)
                                        and 0 < duration_s <= MAX_DURATION_S):
         raise ValueError(f"duration must be a number of seconds in (0, {MAX_DURATION_S:g}], got {duration_s!r}")
-    default = eval_env_config(scenario, "setpoints", throttle_max=throttle_max)  # a bad ceiling fails before any output
+    # a bad ceiling or leader reference fails before any output
+    default = eval_env_config(scenario, "setpoints", throttle_max=throttle_max, leader_reference=leader_reference)
     if turbulence_sigma_mps is None:  # the test set's level: 1 m/s, or a task preset's own (wake_surfing)
         turbulence_sigma_mps = default.randomisation.turbulence_sigma_mps
     if not (isinstance(turbulence_sigma_mps, (int, float)) and math.isfinite(turbulence_sigma_mps) and turbulence_sigma_mps >= 0):
@@ -186,7 +189,7 @@ def evaluate(policies: Sequence[str], *, scenario: str, episodes: int = TEST_EPI
     for pol in loaded:
         cfg = eval_env_config(scenario, pol.action_mode, turbulence_sigma_mps=turbulence_sigma_mps, wake=wake,
                               turbulence_field=turbulence_field, wake_fidelity=wake_fidelity, throttle_max=throttle_max,
-                              control_hz=pol.control_hz, compute_benefit=compute_benefit, duration_s=duration_s)
+                              leader_reference=leader_reference, control_hz=pol.control_hz, compute_benefit=compute_benefit, duration_s=duration_s)
         t0 = time.perf_counter()
         eps = run_episodes(pol, cfg, seeds, keep_series=True)
         summ = summarise(eps, n_boot=n_boot)
@@ -212,6 +215,7 @@ def evaluate(policies: Sequence[str], *, scenario: str, episodes: int = TEST_EPI
               "wake_coupling": resolve_coupling(WakeConfig(), scenario=get_scenario(scenario)),
               "wake_fidelity": wake_fidelity or resolve_fidelity(scenario=get_scenario(scenario)),
               **({} if throttle_max == 1.0 else {"throttle_max": float(throttle_max)}),
+              **({} if leader_reference is None else {"leader_reference": leader_reference}),
               "policies": {n: {k: v for k, v in r.items()} for n, r in results.items()},
               "baselines": baselines, "comparisons": comps, "groups": group_reports,
               "statistics": {"confidence": 0.95, "n_boot": n_boot, "bootstrap_seed": 0,
@@ -247,6 +251,7 @@ def evaluate(policies: Sequence[str], *, scenario: str, episodes: int = TEST_EPI
                 f"wake {'on' if wake else 'off'} ({report['wake_coupling']} coupling, {report['wake_fidelity']} fidelity), turbulence {report['turbulence_field']} "
                 f"sigma {turbulence_sigma_mps:g} m/s"
                 + ("" if throttle_max == 1.0 else f", throttle ceiling {throttle_max:g} (a counterfactual engine)")
+                + ("" if leader_reference is None else f", the leader's reference {leader_reference}-relative")
                 + ". Intervals: 95 %, "
                 f"percentile bootstrap over episodes (scipy.stats.bootstrap, {n_boot} resamples, seed 0) for errors, "
                 f"Wilson for rates; rliable aggregates over training seeds x episodes.\n\n")

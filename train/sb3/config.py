@@ -238,7 +238,8 @@ class TrainConfig:
     torch_threads: int = 1
     reward_scale: float = 1.0
     # an SB3 zip of the same algorithm and policy whose parameters start the run (fine-tuning, e.g. vee_rotation
-    # from a vee5 policy); None: a fresh initialisation
+    # from a vee5 policy); "{seed}" in it stands for the run's seed (each training seed from its own policy); None:
+    # a fresh initialisation
     init_policy: str | None = None
     # the separation guard (agents.separation_guard) filters the policy's set-point actions in training, in
     # validation and wherever the published policy is evaluated (its sidecar says so): part of the policy
@@ -280,9 +281,12 @@ class TrainConfig:
                 raise ValueError(f"{name} must be >= 0 (0: off), got {getattr(self, name)}")
         if not 1 <= self.eval_episodes <= 10_000:
             raise ValueError(f"eval_episodes must be in [1, 10000], got {self.eval_episodes}")
+        if isinstance(self.init_policy, str) and "{seed}" in self.init_policy:
+            object.__setattr__(self, "init_policy", self.init_policy.replace("{seed}", str(self.seed)))
         if self.init_policy is not None and (not isinstance(self.init_policy, str) or not self.init_policy.endswith(".zip")
                                              or not Path(self.init_policy).is_file()):
-            raise ValueError(f"init_policy must be None or the path of an existing SB3 .zip, got {self.init_policy!r}")
+            raise ValueError(f"init_policy must be None or the path of an existing SB3 .zip (\"{{seed}}\" for the run's "
+                             f"seed), got {self.init_policy!r}")
         if isinstance(self.reward_scale, bool) or not isinstance(self.reward_scale, (int, float)) \
                 or not math.isfinite(self.reward_scale) or not 0 < self.reward_scale <= 1e3:
             raise ValueError(f"reward_scale must be a finite number > 0 (and <= 1000), got {self.reward_scale!r}")

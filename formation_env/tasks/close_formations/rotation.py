@@ -34,7 +34,7 @@ from ...scenarios import Scenario, SlotSchedule
 from ..base import Task, register_task
 from . import optimum as _optimum
 
-__all__ = ["PHASES_S", "rotation_keyframes", "SCENARIO", "TASK"]
+__all__ = ["PHASES_S", "rotation_keyframes", "leader_dropback_keyframes", "SCENARIO", "TASK"]
 
 #: phase boundaries, s: hold to 15, port side out 15-25, forward 25-50, starboard side to port 50-62, hold to 80
 PHASES_S = (15.0, 25.0, 50.0, 62.0, 80.0)
@@ -69,6 +69,19 @@ def rotation_keyframes(slots_b, phases_s=PHASES_S) -> tuple:
     return tuple(out)
 
 
+def leader_dropback_keyframes(keyframes) -> tuple:
+    """Vehicle 0's own keyframes ``((t, (x, 0, z)), ...)`` in spans from the reference for the followers'
+    ``keyframes`` (:func:`rotation_keyframes`): the leader drops back and down exactly as far as vehicle 1 (the new
+    apex) moves up relative to it, on the same blends, so that vehicle 1 holds its place along the track and its
+    height while vehicles 0, 2 and 4 slow down and vehicle 3 holds its speed. No UAV is asked to fly faster than the
+    reference (25 m/s) at any time: the hand-over costs throttle, not thrust (measured: posed as the others
+    outrunning the leader, the rotation in turbulence was limited by the Aerosonde's thrust; docs/multi_agent.md)."""
+    kf1 = keyframes[0]
+    x0, z0 = kf1[0][1][0], kf1[0][1][2]
+    return tuple((t, (float(round(-(off[0] - x0), 6)) + 0.0, 0.0, float(round(-(off[2] - z0), 6)) + 0.0))
+                 for t, off in kf1)
+
+
 def _scenario() -> Scenario:
     entry = _optimum.optimum("vee5")
     keyframes = rotation_keyframes(entry["slots_b"])
@@ -76,6 +89,7 @@ def _scenario() -> Scenario:
                     "to the starboard rank 2 while the others move up (port side out, all forward 4-6 spans, the "
                     "starboard side across ahead of vehicle 0), then holds the new vee",
                     duration_s=PHASES_S[-1], slots=tuple(SlotSchedule(kf) for kf in keyframes),
+                    leader_schedule=SlotSchedule(leader_dropback_keyframes(keyframes)), leader_air_relative=True,
                     notes={"phases_s": list(PHASES_S), "start_and_end": "vee5's joint optimum, apex vehicle 0 -> 1"},
                     wake_coupling="load_weighted", wake_fidelity="converged", neighbour_count=2)
 
