@@ -5,8 +5,13 @@ The formation starts and ends as ``vee5``'s joint induced-drag optimum (:mod:`.o
 rank 1 at s1 = (-2, +-0.89, 0) b, rank 2 at s2 = (-4, +-1.79, 0) b (x forward, y starboard, z down, from the
 UAV at the apex). After the rotation the starboard rank-1 follower (vehicle 1) is the apex, vehicle 3 its
 starboard rank 1, vehicle 0 its starboard rank 2 (the tired leader at the end of a side), vehicles 2 and 4 keep
-their port slots. Slots are relative to vehicle 0, which flies its own straight track (as an agent, below), so in its frame
-the rotation is the four followers moving forward and to port, past it: with A = -s2 the new apex relative
+their port slots. Slots are relative to vehicle 0 (as an agent, below), so in its frame the rotation is the four
+followers moving forward and to port, past it. Over the ground it is the leader that drops back, as geese do: its
+reference (:func:`leader_dropback_keyframes`) slows so that vehicle 1 holds its place, and it is carried by the air
+along the track and vertically (``Scenario.leader_air_relative``: a leader holding its airspeed and flying level in
+the air mass). Posed with a leader that held 25 m/s over the ground at a fixed altitude, the rotation in turbulence
+was thrust-limited: a sustained downdraft took the leader's whole throttle (55 m behind its reference in one episode)
+and the followers could not gain on a leader at full throttle (docs/multi_agent.md). In vehicle 0's frame: with A = -s2 the new apex relative
 to vehicle 0, vehicle 1 ends at A, vehicle 3 at A + s1, vehicle 2 at A + mirror(s1) and vehicle 4 at A +
 mirror(s2). The schedule (:func:`rotation_keyframes`) orders the moves so that no two paths cross and every
 pass is abeam at least two lateral steps (~1.8 b, 5 m against the 1.45 m collision separation):
