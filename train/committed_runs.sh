@@ -28,6 +28,10 @@ jobs_list() {
     echo "vee5 4000000 $seed"       # issue 25: the recipe's 4M steps with the step size decayed linearly
     echo "vee5_mappo 4000000 $seed"   # vee5 with train/hyperparams/mappo.yml (the centralised critic; vee5's budget)
     echo "echelon3 3000000 $seed"   # issue 25: the recipe's 3M steps with the step size decayed linearly
+    # issue 25: fine-tuned from train/policies/vee5_ppo_setpoints_seed<k>.zip (the recipe's init_policy: the committed
+    # zip, so a re-run from scratch must publish vee5 first for a changed vee5 to carry over); three at a time beside
+    # close_formation probes as committed
+    echo "vee_rotation 1500000 $seed"
   done
 }
 # ONLY="scenario:seed scenario:seed ..." runs a subset (e.g. to redo one run)
@@ -51,7 +55,7 @@ export RUNS FE
 jobs_list | selected | xargs -P 2 -L 1 bash -c 'run_one "$0" "$1" "$2"'
 [ -n "${NO_PUBLISH:-}" ] && exit 0
 
-for scenario in formation_keeping close_formation reconfiguration wake_surfing wake_surfing_random_leader vee5 echelon3; do
+for scenario in formation_keeping close_formation reconfiguration wake_surfing wake_surfing_random_leader vee5 echelon3 vee_rotation; do
   for seed in 0 1 2; do
     run="$RUNS/${scenario}_seed${seed}"
     wall=$("$PY" -c "import json,sys; print(json.load(open(sys.argv[1]))['wall_s'])" "$run/summary.json")

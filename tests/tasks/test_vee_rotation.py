@@ -192,3 +192,23 @@ def test_an_air_relative_leaders_reference_moves_with_the_air():
             assert np.all(carried == 0.0)
         else:  # ~8 s in a 1 m/s field: the air has carried the reference a measurable distance
             assert np.all(np.abs(carried[:, [0, 2]]) > 0.05), carried
+
+
+def test_the_leader_reference_is_an_env_option():
+    """EnvConfig.leader_reference overrides the scenario's: "ground" flies vee_rotation's leader on the still-air path
+    (in turbulence), "air" carries close_formation's; a bad value is one clear error naming it."""
+    from formation_env.sim import Simulation
+    from formation_env.sim.config import Randomisation
+
+    rnd = Randomisation(turbulence_sigma_mps=1.0)
+    sim = Simulation(EnvConfig(scenario="vee_rotation", learning="all", leader_reference="ground", randomisation=rnd))
+    sim.reset(seeds=[3])
+    for _ in range(20):
+        sim.step(np.zeros((1, 5, 4)))
+    ref_pos, ref_vel = get_scenario("vee_rotation").reference(sim.time_s[0])
+    np.testing.assert_allclose(sim.state.position_demand[0, 0], ref_pos, rtol=0, atol=1e-9)
+    np.testing.assert_allclose(sim.state.velocity_demand[0, 0], ref_vel, rtol=0, atol=1e-12)
+    air = Simulation(EnvConfig(scenario="close_formation", leader_reference="air", randomisation=rnd))
+    assert air.leader_air_relative and not Simulation(EnvConfig(scenario="close_formation")).leader_air_relative
+    with pytest.raises(ValueError, match="leader_reference must be None.*'sky'"):
+        EnvConfig(scenario="vee5", leader_reference="sky")

@@ -60,6 +60,16 @@ def test_init_policy_starts_a_run_from_another_runs_parameters(tmp_path, tiny):
     with pytest.raises(ValueError, match="init_policy"):
         TrainConfig(scenario="formation_keeping", algo="ppo", action_mode="setpoints", seed=0, n_timesteps=64,
                     init_policy=str(tmp_path / "missing.zip"))
+    # "{seed}" stands for the run's seed (each training seed fine-tuned from its own policy)
+    import shutil
+
+    shutil.copy(src, tmp_path / "pol_seed7.zip")
+    placeheld = TrainConfig(scenario="formation_keeping", algo="ppo", action_mode="setpoints", seed=7, n_timesteps=64,
+                            init_policy=str(tmp_path / "pol_seed{seed}.zip"))
+    assert placeheld.init_policy == str(tmp_path / "pol_seed7.zip")
+    with pytest.raises(ValueError, match="pol_seed8.zip"):
+        TrainConfig(scenario="formation_keeping", algo="ppo", action_mode="setpoints", seed=8, n_timesteps=64,
+                    init_policy=str(tmp_path / "pol_seed{seed}.zip"))
     wide = {**tiny("ppo"), "init_policy": src, "policy_kwargs": {"net_arch": [8, 8]}}
     with pytest.raises(ValueError, match="does not fit"):
         train(scenario="formation_keeping", algo="ppo", action_mode="setpoints", seed=0, steps=64,
