@@ -12,8 +12,21 @@ RANDOM = Randomisation(initial_offset_m=2.0, slot_offset_b=0.1, steady_wind_mps=
                        leader_turn_deg=20.0, leader_climb_m=10.0, leader_speed_mps=2.0)
 
 
+def _randomisation(scenario):
+    """RANDOM, less the leader's random manoeuvre where the scenario sets its leader's reference itself (vee_rotation:
+    a drop-back schedule, carried by the air), which refuses one."""
+    from dataclasses import replace
+
+    from formation_env.scenarios import get_scenario
+
+    sc = get_scenario(scenario)
+    if sc.leader_schedule is not None or sc.leader_air_relative:
+        return replace(RANDOM, leader_turn_deg=0.0, leader_climb_m=0.0, leader_speed_mps=0.0)
+    return RANDOM
+
+
 def _rollout(scenario, seed, n_steps, mode):
-    env = formation_env.parallel_env(scenario, action_mode=mode, randomisation=RANDOM)
+    env = formation_env.parallel_env(scenario, action_mode=mode, randomisation=_randomisation(scenario))
     rng = np.random.default_rng(seed)
     obs, _ = env.reset(seed=seed)
     trace = []
