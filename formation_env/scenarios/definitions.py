@@ -162,11 +162,12 @@ class Scenario:
             raise ValueError(f"Scenario.leader_air_relative must be True or False, got {self.leader_air_relative!r}")
         if self.leader_schedule is not None:
             if not isinstance(self.leader_schedule, SlotSchedule):
-                raise ValueError(f"Scenario.leader_schedule must be a SlotSchedule or None, got {self.leader_schedule!r}")
+                raise ValueError(f"Scenario.leader_schedule must be a SlotSchedule or None, got "
+                                 f"{self.leader_schedule!r}")
             lateral = [off[1] for _, off in self.leader_schedule.keyframes if off[1] != 0.0]
             if lateral:
-                raise ValueError(f"Scenario.leader_schedule must keep the lateral offset 0 (along the track and vertical "
-                                 f"only), got y = {lateral[0]!r} spans")
+                raise ValueError(f"Scenario.leader_schedule must keep the lateral offset 0 (along the track and "
+                                 f"vertical only), got y = {lateral[0]!r} spans")
         if not all(isinstance(g, TransientGust) for g in self.gusts):
             raise ValueError("Scenario.gusts must be TransientGust instances")
         ref = tuple(float(v) for v in self.reference_offset_ned)

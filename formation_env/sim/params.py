@@ -238,8 +238,9 @@ def scenario_arrays(sc, manoeuvres: bool, leader_air_relative: bool | None = Non
                           reference_offset_ned=np.asarray(sc.reference_offset_ned, float), slot_times_s=times,
                           slot_offsets_m=offs, slot_keyframes=count, span_m=float(span),
                           slot_along_leader_demand=sc.slot_frame == "leader_demand", gusts=gusts,
-                          manoeuvres=bool(manoeuvres), leader_air_relative=bool(sc.leader_air_relative if leader_air_relative is None
-                                                                   else leader_air_relative))
+                          manoeuvres=bool(manoeuvres),
+                          leader_air_relative=bool(sc.leader_air_relative if leader_air_relative is None
+                                                   else leader_air_relative))
 
 
 def safe_box_arrays(sc) -> tuple[np.ndarray, np.ndarray]:

@@ -212,3 +212,26 @@ def test_the_leader_reference_is_an_env_option():
     assert air.leader_air_relative and not Simulation(EnvConfig(scenario="close_formation")).leader_air_relative
     with pytest.raises(ValueError, match="leader_reference must be None.*'sky'"):
         EnvConfig(scenario="vee5", leader_reference="sky")
+
+
+def test_the_air_relative_leaders_displacement_integrates_the_wind_step_by_step():
+    """The integration law itself: deciding every physics step (50 Hz), the air-relative leader's accumulated
+    displacement grows each step by dt times the north / down wind at the state the step ends in (backward Euler on
+    the physics grid), to the last bit, and its east component stays 0."""
+    from formation_env.sim import Simulation
+    from formation_env.sim.config import Randomisation
+
+    sim = Simulation(EnvConfig(scenario="vee_rotation", learning="all", control_hz=50.0,
+                               randomisation=Randomisation(turbulence_sigma_mps=1.0, steady_wind_mps=3.0)),
+                     batch_size=2)
+    sim.reset(seeds=[8, 9])
+    before = sim.state.reference_position.copy()
+    for _ in range(30):
+        sim.step(np.zeros((2, 5, 4)))
+        wind = sim.state.steady_wind + sim.state.gust_ned[:, 0]
+        after = sim.state.reference_position.copy()
+        for ax in (0, 2):
+            assert np.array_equal(after[:, ax], before[:, ax] + 0.02 * wind[:, ax])
+        assert np.all(after[:, 1] == 0.0)
+        before = after
+    assert np.all(np.abs(before[:, 0]) > 0.0)

@@ -11,8 +11,8 @@ reference (:func:`leader_dropback_keyframes`) slows so that vehicle 1 holds its 
 along the track and vertically (``Scenario.leader_air_relative``: a leader holding its airspeed and flying level in
 the air mass). Posed with a leader that held 25 m/s over the ground at a fixed altitude, the rotation in turbulence
 was thrust-limited: a sustained downdraft took the leader's whole throttle (55 m behind its reference in one episode)
-and the followers could not gain on a leader at full throttle (docs/multi_agent.md). In vehicle 0's frame: with A = -s2 the new apex relative
-to vehicle 0, vehicle 1 ends at A, vehicle 3 at A + s1, vehicle 2 at A + mirror(s1) and vehicle 4 at A +
+and the followers could not gain on a leader at full throttle (docs/multi_agent.md). In vehicle 0's frame: with
+A = -s2 the new apex relative to vehicle 0, vehicle 1 ends at A, vehicle 3 at A + s1, vehicle 2 at A + mirror(s1) and vehicle 4 at A +
 mirror(s2). The schedule (:func:`rotation_keyframes`) orders the moves so that no two paths cross and every
 pass is abeam at least two lateral steps (~1.8 b, 5 m against the 1.45 m collision separation):
 
