@@ -9,7 +9,9 @@
 # and vee5 retrained with the saving weighted 8, now their recipes' value, the same commands; vee5_mappo retrained on the
 # converged wake with the same command: seeds 0 and 1 two at a time, seed 2 beside their held-out evaluation; vee5 retrained
 # with its recipe's 4M steps and decayed step size: seeds 0 and 1 two at a time, seed 2 beside them and their evaluation;
-# vee5_mappo retrained with vee5's budget, step size and priced model selection: seeds 0, 1 and 2 three at a time).
+# vee5_mappo retrained with vee5's budget, step size and priced model selection: seeds 0, 1 and 2 three at a time;
+# close_formation re-run with the same command once its task's leader flew with the air, 2026-12-05: seeds 0 and 1 two
+# at a time, seed 2 beside the record's evaluation).
 # Usage: bash train/committed_runs.sh [RUNS_DIR]
 set -euo pipefail
 cd "$(dirname "$0")/.."
