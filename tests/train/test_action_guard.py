@@ -67,9 +67,11 @@ def test_a_sidecar_names_the_guards_gains(tmp_path):
     pol = load_policy(str(src.with_suffix(".zip")))
     obs = _overtaking(8)
     k = 0
-    for name, size in group_sizes(2).items():  # deeper in the guard: 4.8 m ahead of the slot, the leader 1 m ahead
+    # deeper in the guard: 4.8 m ahead of the slot and 1 m starboard of it, the leader 1 m ahead and 2.8 m to port;
+    # a policy steering back to its slot steers toward the leader's side there, which the clip must hold
+    for name, size in group_sizes(2).items():
         if name == "slot_position_error":
-            obs[4:, k:k + size] = slog(np.array([4.8, 0.0, 0.0]), 1.0)
+            obs[4:, k:k + size] = slog(np.array([4.8, 1.0, 0.0]), 1.0)
         elif name == "neighbours":
             obs[4:, k:k + 3] = slog(np.array([1.0, -2.8, 0.0]), 3.0)
         k += size
