@@ -136,10 +136,14 @@ class Simulation:
         self.leader_air_relative = (sc.leader_air_relative if config.leader_reference is None
                                     else config.leader_reference == "air")
         if (sc.leader_schedule is not None or self.leader_air_relative) and rnd.any_manoeuvre:
+            given = {k: getattr(rnd, k) for k in ("leader_turn_deg", "leader_climb_m", "leader_speed_mps",
+                                                  "leader_speed_offset_min_mps", "leader_speed_offset_max_mps")
+                     if getattr(rnd, k) != 0.0}
             raise ValueError(f"scenario {sc.name!r} with its leader's reference set here (a Scenario.leader_schedule, or "
                              f"carried by the air: Scenario.leader_air_relative / EnvConfig.leader_reference 'air') cannot "
-                             f"take a randomised leader manoeuvre or speed offset, which would replace it: leader_turn_deg, "
-                             f"leader_climb_m, leader_speed_mps and the speed offsets must be 0 for it")
+                             f"take a randomised leader manoeuvre or speed offset, which would replace it: got {given}; "
+                             f"leader_turn_deg, leader_climb_m, leader_speed_mps and the speed offsets must be 0 for it "
+                             f"(or EnvConfig.leader_reference 'ground' where the scenario has no leader_schedule)")
         sigma = rnd.turbulence_sigma_mps
         self.params = StepParams(
             dt_s=float(sc.dt), substeps=self.substeps, episode_steps=self.n_steps,
