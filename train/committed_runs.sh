@@ -11,7 +11,10 @@
 # with its recipe's 4M steps and decayed step size: seeds 0 and 1 two at a time, seed 2 beside them and their evaluation;
 # vee5_mappo retrained with vee5's budget, step size and priced model selection: seeds 0, 1 and 2 three at a time;
 # close_formation re-run with the same command once its task's leader flew with the air, 2026-12-05: seeds 0 and 1 two
-# at a time, seed 2 beside the record's evaluation).
+# at a time, seed 2 beside the record's evaluation; vee5 and echelon3 re-run with the same commands once the N-UAV
+# tasks' leader flew with the air, 2026-12-05: vee5 seeds 0 and 1 two at a time, then vee5 seed 2 and echelon3 seeds
+# 0-2 two to three at a time beside evaluations; vee5_mappo and vee_rotation not re-run: their zips were trained behind
+# the ground-fixed leader, vee_rotation fine-tuned from the vee5 zips of git 24b59b6).
 # Usage: bash train/committed_runs.sh [RUNS_DIR]
 set -euo pipefail
 cd "$(dirname "$0")/.."

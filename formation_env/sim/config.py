@@ -320,7 +320,8 @@ class EnvConfig:
         trim speed over the ground at a fixed altitude) or "air" (carried along the track and vertically by the air
         vehicle 0 flies in: a leader that holds its airspeed and flies level in the air mass;
         :attr:`formation_env.scenarios.Scenario.leader_air_relative`); None (default): the scenario's ("air" in
-        close_formation and vee_rotation, "ground" elsewhere). Not with randomised leader manoeuvres.
+        close_formation, echelon3, vee5, vee9 and vee_rotation, "ground" elsewhere). Not with randomised leader
+        manoeuvres.
     neighbour_count: the other UAVs each agent observes (the ``neighbours`` group): 0 every other UAV in index
         order (6 (V - 1) values: the size grows with the formation); k >= 1 the k whose slots are nearest the
         agent's, nearest first (6 k values whatever the formation's size, so one policy flies an echelon of 3,

@@ -196,8 +196,8 @@ def test_an_air_relative_leaders_reference_moves_with_the_air():
 
 def test_the_leader_reference_is_an_env_option():
     """EnvConfig.leader_reference overrides the scenario's: "ground" flies vee_rotation's leader on the still-air path
-    (in turbulence), "air" carries vee5's, "ground" gives close_formation (air-relative since issue 24) the thesis's
-    leader back; a bad value is one clear error naming it."""
+    (in turbulence), "air" carries the thesis vee's, "ground" gives close_formation and vee5 (air-relative since issues
+    24 and 25) the thesis's leader back; a bad value is one clear error naming it."""
     from formation_env.sim import Simulation
     from formation_env.sim.config import Randomisation
 
@@ -209,10 +209,11 @@ def test_the_leader_reference_is_an_env_option():
     ref_pos, ref_vel = get_scenario("vee_rotation").reference(sim.time_s[0])
     np.testing.assert_allclose(sim.state.position_demand[0, 0], ref_pos, rtol=0, atol=1e-9)
     np.testing.assert_allclose(sim.state.velocity_demand[0, 0], ref_vel, rtol=0, atol=1e-12)
-    air = Simulation(EnvConfig(scenario="vee5", leader_reference="air", randomisation=rnd))
-    assert air.leader_air_relative and not Simulation(EnvConfig(scenario="vee5")).leader_air_relative
-    assert Simulation(EnvConfig(scenario="close_formation")).leader_air_relative
-    assert not Simulation(EnvConfig(scenario="close_formation", leader_reference="ground")).leader_air_relative
+    air = Simulation(EnvConfig(scenario="vee", leader_reference="air", randomisation=rnd))
+    assert air.leader_air_relative and not Simulation(EnvConfig(scenario="vee")).leader_air_relative
+    for name in ("close_formation", "echelon3", "vee5", "vee9"):
+        assert Simulation(EnvConfig(scenario=name)).leader_air_relative
+        assert not Simulation(EnvConfig(scenario=name, leader_reference="ground")).leader_air_relative
     with pytest.raises(ValueError, match="leader_reference must be None.*'sky'"):
         EnvConfig(scenario="vee5", leader_reference="sky")
 

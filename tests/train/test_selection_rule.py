@@ -59,23 +59,19 @@ def test_the_n_uav_recipes_price_collisions_and_mappo_inherits_it(scenario):
     assert other.selection_collision_cost is None
 
 
-@pytest.mark.parametrize("name", ["echelon3_ppo_setpoints", "vee5_ppo_setpoints"])
-def test_the_committed_ppo_runs_select_the_same_models_under_the_priced_rule(name):
-    """The rule changed after the committed echelon3 and vee5 PPO runs were trained: replayed over each run's
-    validation history, the priced rule picks the evaluation that the all-or-nothing rule picked, which is the
-    step of the published model (its sidecar), so their commands still reproduce them."""
+@pytest.mark.parametrize("name", ["echelon3_ppo_setpoints", "vee5_ppo_setpoints", "vee5_mappo_setpoints"])
+def test_the_committed_n_uav_runs_publish_the_model_their_recipe_selects(name):
+    """Replayed over each committed run's validation history, the recipes' priced rule (cost 2) picks the evaluation
+    whose step the published model carries (its sidecar), so the plain commands reproduce the committed zips. (The
+    echelon3 and vee5 runs committed before the rule was priced were checked to give the same model under both rules;
+    the runs behind the air-relative leader, 2026-12-05, were trained with the priced rule.)"""
     for seed in range(3):
         history = json.loads((POLICIES / f"{name}_seed{seed}_evaluations.json").read_text())
         side = json.loads((POLICIES / f"{name}_seed{seed}.json").read_text())
-
-        def pick(cost):
-            best, best_steps = None, None
-            for e in history:  # the callback's rule: strictly lower replaces, so the earliest of equals stays
-                s = selection_score(e, cost)
-                if best is None or s < best:
-                    best, best_steps = s, e["num_timesteps"]
-            return best, best_steps
-
-        (s_inf, at_inf), (s_2, at_2) = pick(None), pick(2.0)
-        assert math.isfinite(s_inf) and at_inf == at_2
-        assert side["num_timesteps"] == at_2
+        best, best_steps = None, None
+        for e in history:  # the callback's rule: strictly lower replaces, so the earliest of equals stays
+            s = selection_score(e, 2.0)
+            if best is None or s < best:
+                best, best_steps = s, e["num_timesteps"]
+        assert math.isfinite(best)
+        assert side["num_timesteps"] == best_steps
