@@ -13,8 +13,8 @@
 # close_formation re-run with the same command once its task's leader flew with the air, 2026-12-05: seeds 0 and 1 two
 # at a time, seed 2 beside the record's evaluation; vee5 and echelon3 re-run with the same commands once the N-UAV
 # tasks' leader flew with the air, 2026-12-05: vee5 seeds 0 and 1 two at a time, then vee5 seed 2 and echelon3 seeds
-# 0-2 two to three at a time beside evaluations; vee5_mappo and vee_rotation not re-run: their zips were trained behind
-# the ground-fixed leader, vee_rotation fine-tuned from the vee5 zips of git 24b59b6).
+# 0-2 two to three at a time beside evaluations, then vee_rotation from the new vee5 zips, three at a time; vee5_mappo
+# not re-run: its zips were trained behind the ground-fixed leader).
 # Usage: bash train/committed_runs.sh [RUNS_DIR]
 set -euo pipefail
 cd "$(dirname "$0")/.."
