@@ -196,8 +196,8 @@ def test_an_air_relative_leaders_reference_moves_with_the_air():
 
 def test_the_leader_reference_is_an_env_option():
     """EnvConfig.leader_reference overrides the scenario's: "ground" flies vee_rotation's leader on the still-air path
-    (in turbulence), "air" carries the thesis vee's, "ground" gives close_formation and vee5 (air-relative since issues
-    24 and 25) the thesis's leader back; a bad value is one clear error naming it."""
+    (in turbulence), "air" carries the thesis vee's, "ground" gives close_formation and the N-UAV tasks (air-relative
+    since issues 24 and 25) the thesis's leader back; a bad value is one clear error naming it."""
     from formation_env.sim import Simulation
     from formation_env.sim.config import Randomisation
 
