@@ -51,3 +51,28 @@ def test_one_level_directory_is_recorded_as_its_level(tmp_path):
     rec = lr.levels_record(_results(tmp_path) / "sigma_1")
     assert rec["levels"] == [1.0] and list(rec["by_level"]) == ["sigma_1"]
     assert rec["by_level"]["sigma_1"] == lr.levels_record(tmp_path)["by_level"]["sigma_1"]
+
+
+def test_task_records_are_added_never_dropped(tmp_path, capsys):
+    """``--task``: the N-UAV records' format, {"_about", "records": {task: [record, ...]}}; a new file needs
+    --about, an existing one keeps its records (and its about unless --overwrite replaces it)."""
+    src = _results(tmp_path / "r") if (tmp_path / "r").mkdir() is None else None
+    out = tmp_path / "rec.json"
+    assert lr.main([str(src), str(out), "--task", "vee5"]) == 2 and "--about" in capsys.readouterr().err
+    assert not out.exists()
+    assert lr.main([str(src), str(out), "--task", "vee5", "--about", "A", "--command", "c1"]) == 0
+    assert lr.main([str(src / "sigma_1"), str(out), "--task", "vee5", "--command", "c2"]) == 0
+    assert lr.main([str(src), str(out), "--task", "vee9"]) == 0
+    whole = json.loads(out.read_text())
+    assert whole["_about"] == "A" and list(whole["records"]) == ["vee5", "vee9"]
+    assert [r["command"] for r in whole["records"]["vee5"]] == ["c1", "c2"]
+    assert whole["records"]["vee5"][1] == lr.levels_record(src / "sigma_1", command="c2")
+    assert lr.main([str(src), str(out), "--task", "vee9", "--about", "B"]) == 2  # another about: refused
+    assert "--overwrite" in capsys.readouterr().err and json.loads(out.read_text()) == whole
+    assert lr.main([str(src), str(out), "--task", "vee9", "--about", "B", "--overwrite"]) == 0
+    again = json.loads(out.read_text())
+    assert again["_about"] == "B" and len(again["records"]["vee9"]) == 2 and again["records"]["vee5"] == whole["records"]["vee5"]
+    single = tmp_path / "single.json"
+    assert lr.main([str(src), str(single)]) == 0
+    assert lr.main([str(src), str(single), "--task", "vee5"]) == 2 and "not a multi-task record" in capsys.readouterr().err
+    assert lr.main([str(src), str(tmp_path / "x.json"), "--about", "A"]) == 2  # --about without --task

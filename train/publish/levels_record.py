@@ -7,6 +7,14 @@ smallest separation, collision, episode length, and a moving-slot task's success
 The per-decision series and the ablated copies' episodes stay out (the full results are ~30 MB).
 
     python -m train.publish.levels_record RESULTS_DIR OUT.json [--command "..."] [--overwrite]
+
+The N-UAV records hold several such records, one list per task flown (``{"_about": text, "records": {task:
+[record, ...]}}``: a formation's policies flown on their own task and, without retraining, on others):
+
+    python -m train.publish.levels_record RESULTS_DIR OUT.json --task TASK [--about TEXT] [--command "..."]
+
+adds this record to ``records[TASK]`` of OUT.json (a new file needs ``--about``, what the record holds; an existing
+one keeps its own, unless ``--about`` with ``--overwrite`` replaces it). Adding never drops a record already there.
 """
 
 from __future__ import annotations
@@ -16,7 +24,7 @@ import json
 import sys
 from pathlib import Path
 
-__all__ = ["EPISODE_KEYS", "levels_record", "main"]
+__all__ = ["EPISODE_KEYS", "add_to_task_record", "levels_record", "main"]
 
 EPISODE_KEYS = ("seed", "duration_s", "harvest_ratio", "rms_along_track_m", "rms_lateral_m", "rms_vertical_m",
                 "min_separation_m", "collision", "formation_saving")
@@ -58,13 +66,47 @@ def levels_record(results_dir: str | Path, *, command: str | None = None) -> dic
     return out
 
 
+def add_to_task_record(record: dict, path: str | Path, task: str, *, about: str | None = None,
+                       overwrite_about: bool = False) -> dict:
+    """``path``'s multi-task record (a new one when absent: ``about`` required) with ``record`` appended to
+    ``records[task]``; written atomically. Returns the whole record."""
+    from formation_env.io import atomic_write_text
+
+    if not isinstance(task, str) or not task.strip():
+        raise ValueError(f"task must be a non-empty name (the record's key), got {task!r}")
+    path = Path(path)
+    if path.is_file():
+        whole = json.loads(path.read_text())
+        if not (isinstance(whole, dict) and isinstance(whole.get("records"), dict) and "_about" in whole):
+            raise ValueError(f"{path} is not a multi-task record (a JSON object with '_about' and 'records'); "
+                             f"a one-record file is written without --task")
+        if about is not None:
+            if not overwrite_about and about != whole["_about"]:
+                raise FileExistsError(f"{path} has its own '_about'; pass --overwrite to replace it with --about")
+            whole["_about"] = about
+    else:
+        if not about:
+            raise ValueError(f"{path} does not exist: a new multi-task record needs --about (what it holds)")
+        whole = {"_about": about, "records": {}}
+    whole["records"].setdefault(task, []).append(record)
+    atomic_write_text(path, json.dumps(whole, separators=(",", ":")) + "\n", overwrite=True)
+    return whole
+
+
 def main(argv: list[str] | None = None) -> int:
     p = argparse.ArgumentParser(prog="python -m train.publish.levels_record", description=__doc__.split("\n\n")[0])
     p.add_argument("results_dir")
     p.add_argument("out")
     p.add_argument("--command", help="the evaluate command that made the results (stored in the record)")
-    p.add_argument("--overwrite", action="store_true")
+    p.add_argument("--overwrite", action="store_true",
+                   help="replace OUT.json (with --task: replace its '_about' by --about; its records are kept)")
+    p.add_argument("--task", help="add the record to OUT.json's records[TASK] (a multi-task record, e.g. the "
+                                  "N-UAV ones) instead of writing a one-record file")
+    p.add_argument("--about", help="with --task: what the multi-task record holds (required for a new file)")
     a = p.parse_args(argv)
+    if a.about is not None and a.task is None:
+        print("error: --about belongs to a multi-task record: give --task as well", file=sys.stderr)
+        return 2
     from formation_env.io import atomic_write_text
 
     src = Path(a.results_dir)
@@ -74,8 +116,12 @@ def main(argv: list[str] | None = None) -> int:
         return 2
     try:
         rec = levels_record(src, command=a.command)
+        if a.task is not None:
+            whole = add_to_task_record(rec, a.out, a.task, about=a.about, overwrite_about=a.overwrite)
+            print(f"added to {a.out}: records {({k: len(v) for k, v in whole['records'].items()})}")
+            return 0
         atomic_write_text(a.out, json.dumps(rec, separators=(",", ":")) + "\n", overwrite=a.overwrite)
-    except FileExistsError as e:
+    except (FileExistsError, ValueError) as e:
         print(f"error: {e}", file=sys.stderr)
         return 2
     print(f"wrote {a.out}")
