@@ -14,7 +14,8 @@
 # at a time, seed 2 beside the record's evaluation; vee5 and echelon3 re-run with the same commands once the N-UAV
 # tasks' leader flew with the air, 2026-12-05: vee5 seeds 0 and 1 two at a time, then vee5 seed 2 and echelon3 seeds
 # 0-2 two to three at a time beside evaluations, then vee_rotation from the new vee5 zips, three at a time; vee5_mappo
-# not re-run: its zips were trained behind the ground-fixed leader).
+# re-run with the same command behind that leader, 2026-12-05: seeds 0 and 1 two at a time beside short probes, seed 2
+# beside them from their 1.6M steps on).
 # Usage: bash train/committed_runs.sh [RUNS_DIR]
 set -euo pipefail
 cd "$(dirname "$0")/.."
