@@ -9,9 +9,12 @@ import numpy as np
 
 from .biot_savart import (CORE_NONE, branch, branch_cored, core_radius, leg, leg_cored, leg_sheet_framed, point_to_knots,
                           point_to_knots3, sheet_strip_frames)
+from . import lanes
+from .lanes import KMAX
 from .posing import bound_length, branch_directions, to_ned
 
-__all__ = ["lu_solve_inplace", "static_aic", "assemble_and_solve"]
+__all__ = ["lu_solve_inplace", "static_aic", "assemble_and_solve", "assemble_and_solve_scalar", "assemble_scalar",
+           "assemble_lanes"]
 
 _jit = nb.njit(cache=True, fastmath=False, error_model="numpy")
 
@@ -108,6 +111,29 @@ def assemble_and_solve(
     control_b, normal_b, aic_static, cutoff, aic_core_mode, nu, overlap_core, aic, gamma, r1, inv1, r3, inv3,
     vcross, sheet=None, keep=None,
 ):
+    """Build the AIC over every panel of every vehicle and solve for the circulations (4.25-4.69): the laws and
+    arguments of :func:`assemble_and_solve_scalar`, with the knots of each control point evaluated as vector lanes
+    (:func:`assemble_lanes`, :mod:`.lanes`; bit for bit the same AIC, circulation and ``vcross``) when the lattice
+    has at most :data:`formation_env.wake.lanes.KMAX` knots, else the scalar assembly."""
+    if x1.shape[0] <= KMAX:
+        assemble_lanes(x1, x3, bound_dir, chord_dir, trail, vel, rot, pos, origin, airspeed, knot_vehicle, knot_surface,
+                       surface_knot_start, surface_core_scale, panel_left_knot, panel_vehicle, control_b, normal_b,
+                       aic_static, cutoff, aic_core_mode, nu, overlap_core, aic, gamma, vcross, sheet)
+    else:
+        assemble_scalar(x1, x3, bound_dir, chord_dir, trail, vel, rot, pos, origin, airspeed, knot_vehicle, knot_surface,
+                        surface_knot_start, surface_core_scale, panel_left_knot, panel_vehicle, control_b, normal_b,
+                        aic_static, cutoff, aic_core_mode, nu, overlap_core, aic, gamma, r1, inv1, r3, inv3, vcross,
+                        sheet)
+    _keep_and_solve(aic, gamma, keep)
+
+
+@_jit
+def assemble_and_solve_scalar(
+    x1, x3, bound_dir, chord_dir, trail, vel, rot, pos, origin, airspeed,
+    knot_vehicle, knot_surface, surface_knot_start, surface_core_scale, panel_left_knot, panel_vehicle,
+    control_b, normal_b, aic_static, cutoff, aic_core_mode, nu, overlap_core, aic, gamma, r1, inv1, r3, inv3,
+    vcross, sheet=None, keep=None,
+):
     """Build the AIC over every panel of every vehicle and solve for the circulations (4.25-4.69).
 
     Boundary condition (V_induced + V_inf) . n = 0 with V_inf = -V_vehicle: A G = V_vehicle . n.
@@ -133,6 +159,34 @@ def assemble_and_solve(
     formation benefit solves for the isolated circulation instead of posing and assembling the lone vehicle again
     (:func:`formation_env.wake.benefit.induced_drags_one`; issue 26).
     """
+    assemble_scalar(x1, x3, bound_dir, chord_dir, trail, vel, rot, pos, origin, airspeed, knot_vehicle, knot_surface,
+                    surface_knot_start, surface_core_scale, panel_left_knot, panel_vehicle, control_b, normal_b,
+                    aic_static, cutoff, aic_core_mode, nu, overlap_core, aic, gamma, r1, inv1, r3, inv3, vcross, sheet)
+    _keep_and_solve(aic, gamma, keep)
+
+
+@_jit
+def _keep_and_solve(aic, gamma, keep):
+    """``keep`` (N, N + 1; None or empty: not kept) <- the AIC and right-hand side; then the solve in place."""
+    n_panels = aic.shape[0]
+    if keep is not None and keep.shape[0] > 0:
+        for j in range(n_panels):
+            for p in range(n_panels):
+                keep[j, p] = aic[j, p]
+            keep[j, n_panels] = gamma[j]
+    lu_solve_inplace(aic, gamma)
+
+
+@_jit
+def assemble_scalar(
+    x1, x3, bound_dir, chord_dir, trail, vel, rot, pos, origin, airspeed,
+    knot_vehicle, knot_surface, surface_knot_start, surface_core_scale, panel_left_knot, panel_vehicle,
+    control_b, normal_b, aic_static, cutoff, aic_core_mode, nu, overlap_core, aic, gamma, r1, inv1, r3, inv3,
+    vcross, sheet=None,
+):
+    """The AIC into ``aic`` and the right-hand side into ``gamma`` (see :func:`assemble_and_solve_scalar`), branch by
+    branch with the scalar laws: the reference :func:`assemble_lanes` equals bit for bit, and the path of lattices
+    of more than :data:`formation_env.wake.lanes.KMAX` knots."""
     n_panels = panel_left_knot.shape[0]
     n_knots = x1.shape[0]
     store = vcross.shape[0] > 0
@@ -198,9 +252,74 @@ def assemble_and_solve(
                     vcross[j, p, 1] = lcv[k, 1] + by - lcv[k + 1, 1]
                     vcross[j, p, 2] = lcv[k, 2] + bz - lcv[k + 1, 2]
         gamma[j] = vel[vj, 0] * nrm[0] + vel[vj, 1] * nrm[1] + vel[vj, 2] * nrm[2]
-    if keep is not None and keep.shape[0] > 0:
-        for j in range(n_panels):
-            for p in range(n_panels):
-                keep[j, p] = aic[j, p]
-            keep[j, n_panels] = gamma[j]
-    lu_solve_inplace(aic, gamma)
+
+
+@_jit
+def assemble_lanes(
+    x1, x3, bound_dir, chord_dir, trail, vel, rot, pos, origin, airspeed,
+    knot_vehicle, knot_surface, surface_knot_start, surface_core_scale, panel_left_knot, panel_vehicle,
+    control_b, normal_b, aic_static, cutoff, aic_core_mode, nu, overlap_core, aic, gamma, vcross, sheet=None,
+):
+    """:func:`assemble_scalar` with each control point's knots as vector lanes (:mod:`.lanes`: the other vehicles'
+    L-lines, then their bound branches, and the own trailing legs; the lanes whose fast form is not the law's
+    recomputed by the scalar laws): the same AIC, right-hand side and ``vcross``, bit for bit. At most
+    :data:`~formation_env.wake.lanes.KMAX` knots; a vehicle's knots must be contiguous (the lattice's order)."""
+    n_panels = panel_left_knot.shape[0]
+    n_knots = x1.shape[0]
+    store = vcross.shape[0] > 0
+    cp = np.empty(3)
+    frames = sheet_strip_frames(sheet, trail, x3, knot_vehicle, knot_surface)
+    s = lanes.lane_scratch()
+    lanes.load_knots(s, x1, x3, chord_dir, bound_dir, trail, knot_vehicle, frames, sheet)
+    sheet_on = sheet is not None
+    # without the overlap core every lane takes the scalar law (its plain form is another law)
+    ro2 = overlap_core * overlap_core if overlap_core > 0.0 else np.inf
+    nveh = pos.shape[0]
+    vk0 = np.full(nveh, n_knots)  # each vehicle's knots: vk0[v] .. vk1[v] - 1
+    vk1 = np.zeros(nveh, np.int64)
+    for k in range(n_knots):
+        v = knot_vehicle[k]
+        vk0[v] = min(vk0[v], k)
+        vk1[v] = max(vk1[v], k + 1)
+    for j in range(n_panels):
+        vj = panel_vehicle[j]
+        to_ned(rot[vj], pos[vj], control_b[j], cp)
+        px, py, pz = cp[0], cp[1], cp[2]
+        n0 = rot[vj, 0, 0] * normal_b[j, 0] + rot[vj, 1, 0] * normal_b[j, 1] + rot[vj, 2, 0] * normal_b[j, 2]
+        n1 = rot[vj, 0, 1] * normal_b[j, 0] + rot[vj, 1, 1] * normal_b[j, 1] + rot[vj, 2, 1] * normal_b[j, 2]
+        n2 = rot[vj, 0, 2] * normal_b[j, 0] + rot[vj, 1, 2] * normal_b[j, 1] + rot[vj, 2, 2] * normal_b[j, 2]
+        recv_w = 0.0
+        if sheet is not None:
+            recv_w = bound_length(x1, panel_left_knot[j])
+        a, b = vk0[vj], vk1[vj]
+        lanes.own_legs(s, a, b, px, py, pz, n0, n1, n2, cutoff)
+        lanes.fill_core_radius(s, px, py, pz, vj, origin, airspeed, knot_vehicle, surface_knot_start,
+                               surface_core_scale, aic_core_mode, nu)
+        lanes.other_llines(s, 0, a, px, py, pz, n0, n1, n2, cutoff, ro2, recv_w, sheet_on)
+        lanes.other_llines(s, b, n_knots, px, py, pz, n0, n1, n2, cutoff, ro2, recv_w, sheet_on)
+        lanes.fix_llines(s, 0, a, px, py, pz, n0, n1, n2, x1, x3, chord_dir, trail, knot_vehicle, cutoff,
+                         overlap_core, frames, recv_w, sheet)
+        lanes.fix_llines(s, b, n_knots, px, py, pz, n0, n1, n2, x1, x3, chord_dir, trail, knot_vehicle, cutoff,
+                         overlap_core, frames, recv_w, sheet)
+        if a > 1:
+            lanes.other_bounds(s, 0, a - 1, px, py, pz, ro2)
+        if n_knots - b > 1:
+            lanes.other_bounds(s, b, n_knots - 1, px, py, pz, ro2)
+        for p in range(n_panels):
+            k = panel_left_knot[p]
+            if panel_vehicle[p] == vj:
+                aic[j, p] = aic_static[j, p] - s[lanes.LW + k] + s[lanes.LW + k + 1]
+                continue
+            if s[lanes.BM + k] != 0.0:
+                s[lanes.BX + k], s[lanes.BY + k], s[lanes.BZ + k] = branch_cored(
+                    bound_dir[k, 0], bound_dir[k, 1], bound_dir[k, 2], px - x1[k, 0], py - x1[k, 1], pz - x1[k, 2],
+                    s[lanes.I1 + k], px - x1[k + 1, 0], py - x1[k + 1, 1], pz - x1[k + 1, 2], s[lanes.I1 + k + 1],
+                    cutoff, overlap_core)
+            bx, by, bz = s[lanes.BX + k], s[lanes.BY + k], s[lanes.BZ + k]
+            aic[j, p] = ((s[lanes.CW + k] - s[lanes.LW + k]) + bx * n0 + by * n1 + bz * n2
+                         - (s[lanes.CW + k + 1] - s[lanes.LW + k + 1]))
+            if store:  # horseshoe p = L-line k + bound - L-line k + 1 (the field's decomposition)
+                vcross[j, p, 0] = s[lanes.LCX + k] + bx - s[lanes.LCX + k + 1]
+                vcross[j, p, 1] = s[lanes.LCY + k] + by - s[lanes.LCY + k + 1]
+                vcross[j, p, 2] = s[lanes.LCZ + k] + bz - s[lanes.LCZ + k + 1]
+        gamma[j] = vel[vj, 0] * n0 + vel[vj, 1] * n1 + vel[vj, 2] * n2
