@@ -274,13 +274,7 @@ def assemble_lanes(
     sheet_on = sheet is not None
     # without the overlap core every lane takes the scalar law (its plain form is another law)
     ro2 = overlap_core * overlap_core if overlap_core > 0.0 else np.inf
-    nveh = pos.shape[0]
-    vk0 = np.full(nveh, n_knots)  # each vehicle's knots: vk0[v] .. vk1[v] - 1
-    vk1 = np.zeros(nveh, np.int64)
-    for k in range(n_knots):
-        v = knot_vehicle[k]
-        vk0[v] = min(vk0[v], k)
-        vk1[v] = max(vk1[v], k + 1)
+    vk0, vk1 = lanes.vehicle_knot_ranges(knot_vehicle, pos.shape[0])
     for j in range(n_panels):
         vj = panel_vehicle[j]
         to_ned(rot[vj], pos[vj], control_b[j], cp)
@@ -305,21 +299,15 @@ def assemble_lanes(
             lanes.other_bounds(s, 0, a - 1, px, py, pz, ro2)
         if n_knots - b > 1:
             lanes.other_bounds(s, b, n_knots - 1, px, py, pz, ro2)
-        for p in range(n_panels):
-            k = panel_left_knot[p]
-            if panel_vehicle[p] == vj:
-                aic[j, p] = aic_static[j, p] - s[lanes.LW + k] + s[lanes.LW + k + 1]
+        # the row surface by surface (a surface of n knots has n - 1 panels, numbered from its first knot's index
+        # less the surface's: the lattice's order)
+        for srf in range(surface_knot_start.shape[0] - 1):
+            k0 = surface_knot_start[srf]
+            npan = surface_knot_start[srf + 1] - k0 - 1
+            p0 = k0 - srf
+            if knot_vehicle[k0] == vj:
+                lanes.own_panel_row(s, aic, aic_static, j, p0, k0, npan)
                 continue
-            if s[lanes.BM + k] != 0.0:
-                s[lanes.BX + k], s[lanes.BY + k], s[lanes.BZ + k] = branch_cored(
-                    bound_dir[k, 0], bound_dir[k, 1], bound_dir[k, 2], px - x1[k, 0], py - x1[k, 1], pz - x1[k, 2],
-                    s[lanes.I1 + k], px - x1[k + 1, 0], py - x1[k + 1, 1], pz - x1[k + 1, 2], s[lanes.I1 + k + 1],
-                    cutoff, overlap_core)
-            bx, by, bz = s[lanes.BX + k], s[lanes.BY + k], s[lanes.BZ + k]
-            aic[j, p] = ((s[lanes.CW + k] - s[lanes.LW + k]) + bx * n0 + by * n1 + bz * n2
-                         - (s[lanes.CW + k + 1] - s[lanes.LW + k + 1]))
-            if store:  # horseshoe p = L-line k + bound - L-line k + 1 (the field's decomposition)
-                vcross[j, p, 0] = s[lanes.LCX + k] + bx - s[lanes.LCX + k + 1]
-                vcross[j, p, 1] = s[lanes.LCY + k] + by - s[lanes.LCY + k + 1]
-                vcross[j, p, 2] = s[lanes.LCZ + k] + bz - s[lanes.LCZ + k + 1]
+            lanes.fix_bounds(s, k0, k0 + npan, px, py, pz, x1, bound_dir, cutoff, overlap_core)
+            lanes.other_panel_row(s, aic, vcross, j, p0, k0, npan, n0, n1, n2, store)
         gamma[j] = vel[vj, 0] * n0 + vel[vj, 1] * n1 + vel[vj, 2] * n2

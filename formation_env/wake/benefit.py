@@ -26,6 +26,7 @@ from __future__ import annotations
 import numba as nb
 import numpy as np
 
+from . import lanes
 from .arrays import evaluate_formation
 from .aic import assemble_and_solve, lu_solve_inplace
 from .biot_savart import branch, leg, point_to_knots, sheet_strip_frames
@@ -193,6 +194,86 @@ def _own_field_pair(px, py, pz, v, x1, x3, bound_dir, chord_dir, trail, gamma, g
 
 
 @_jit
+def _own_pair_sum(s, v, gamma, gamma2, surface_vehicle, surface_knot_start, surface_panel_start):
+    """:func:`_own_field_pair` from the lanes of :func:`formation_env.wake.lanes.own_field_lanes` and
+    :func:`~formation_env.wake.lanes.own_field_bounds` (the same branch vectors): the same sums in the same order."""
+    vx = 0.0
+    vy = 0.0
+    vz = 0.0
+    ux = 0.0
+    uy = 0.0
+    uz = 0.0
+    for srf in range(surface_vehicle.shape[0]):
+        if surface_vehicle[srf] != v:
+            continue
+        k0 = surface_knot_start[srf]
+        k1 = surface_knot_start[srf + 1]
+        p0 = surface_panel_start[srf]
+        for k in range(k0, k1):
+            g = 0.0
+            g2 = 0.0
+            if k < k1 - 1:
+                g += gamma[p0 + (k - k0)]
+                g2 += gamma2[p0 + (k - k0)]
+            if k > k0:
+                g -= gamma[p0 + (k - k0) - 1]
+                g2 -= gamma2[p0 + (k - k0) - 1]
+            if g != 0.0 or g2 != 0.0:
+                dx, dy, dz = s[lanes.OLX + k], s[lanes.OLY + k], s[lanes.OLZ + k]
+                if g != 0.0:
+                    vx += g * dx
+                    vy += g * dy
+                    vz += g * dz
+                if g2 != 0.0:
+                    ux += g2 * dx
+                    uy += g2 * dy
+                    uz += g2 * dz
+            if k < k1 - 1:
+                bx, by, bz = s[lanes.OBX + k], s[lanes.OBY + k], s[lanes.OBZ + k]
+                gp = gamma[p0 + (k - k0)]
+                vx += gp * bx
+                vy += gp * by
+                vz += gp * bz
+                gp2 = gamma2[p0 + (k - k0)]
+                ux += gp2 * bx
+                uy += gp2 * by
+                uz += gp2 * bz
+    return vx, vy, vz, ux, uy, uz
+
+
+@_jit
+def _other_field_sum(s, v, gamma, surface_vehicle, surface_knot_start, surface_panel_start):
+    """The other vehicles' field at a point (:func:`~formation_env.wake.field.field_velocity` without ``keep_only``)
+    from the lanes of :func:`formation_env.wake.lanes.other_llines` and :func:`~formation_env.wake.lanes.other_bounds`
+    (fixed where flagged): the same sum in the same order."""
+    vx = 0.0
+    vy = 0.0
+    vz = 0.0
+    for srf in range(surface_vehicle.shape[0]):
+        if surface_vehicle[srf] == v:
+            continue
+        k0 = surface_knot_start[srf]
+        k1 = surface_knot_start[srf + 1]
+        p0 = surface_panel_start[srf]
+        for k in range(k0, k1):
+            g = 0.0
+            if k < k1 - 1:
+                g += gamma[p0 + (k - k0)]
+            if k > k0:
+                g -= gamma[p0 + (k - k0) - 1]
+            if g != 0.0:
+                vx += g * s[lanes.LCX + k]
+                vy += g * s[lanes.LCY + k]
+                vz += g * s[lanes.LCZ + k]
+            if k < k1 - 1:
+                gp = gamma[p0 + (k - k0)]
+                vx += gp * s[lanes.BX + k]
+                vy += gp * s[lanes.BY + k]
+                vz += gp * s[lanes.BZ + k]
+    return vx, vy, vz
+
+
+@_jit
 def _wind_axis_drag(rot, f, alpha, beta):
     """Induced drag (N): minus the body-axis force ``f`` (NED, 3) along the air-relative direction."""
     ca, sa = np.cos(alpha), np.sin(alpha)
@@ -246,6 +327,45 @@ def induced_drags_one(wake, wake_alone, pos, euler, speed, alpha, beta, gamma_fo
     frames = sheet_strip_frames(wake.sheet, trail, x3, wake.knot_vehicle, wake.knot_surface)
     f = np.zeros((nv, 3))  # summed Kutta-Joukowski force per vehicle, NED: in formation
     fa = np.zeros((nv, 3))  # and alone
+    n_knots = x1.shape[0]
+    if n_knots <= lanes.KMAX:
+        # the branches at each bound midpoint as vector lanes (issue 26; bit for bit the scalar pass below)
+        s = lanes.lane_scratch()
+        lanes.load_knots(s, x1, x3, chord_dir, bound_dir, trail, wake.knot_vehicle, frames, wake.sheet)
+        vk0, vk1 = lanes.vehicle_knot_ranges(wake.knot_vehicle, nv)
+        ro2 = wake.overlap_core_m * wake.overlap_core_m if wake.overlap_core_m > 0.0 else np.inf
+        cutoff = wake.cutoff_m
+        for j in range(n_panels):
+            v = wake.panel_vehicle[j]
+            k = wake.panel_left_knot[j]
+            lx, ly, lz, mx, my, mz = _bound_segment(x1, k)
+            a, b = vk0[v], vk1[v]
+            lanes.own_field_lanes(s, a, b, mx, my, mz, cutoff)
+            lanes.own_field_bounds(s, a, b - 1, mx, my, mz, cutoff)
+            ox, oy, oz, ax, ay, az = _own_pair_sum(s, v, gamma_formation, gamma_alone, wake.surface_vehicle,
+                                                   wake.surface_knot_start, wake.surface_panel_start)
+            recv_w = 0.0 if wake.sheet is None else np.sqrt(lx * lx + ly * ly + lz * lz)
+            lanes.fill_core_radius(s, mx, my, mz, v, origin, speed, wake.knot_vehicle, wake.surface_knot_start,
+                                   wake.surface_core_scale, wake.core_mode, wake.kinematic_viscosity)
+            for rng in range(2):
+                lo = 0 if rng == 0 else b
+                hi = a if rng == 0 else n_knots
+                lanes.other_llines(s, lo, hi, mx, my, mz, 0.0, 0.0, 0.0, cutoff, ro2, recv_w, wake.sheet is not None)
+                lanes.fix_llines(s, lo, hi, mx, my, mz, 0.0, 0.0, 0.0, x1, x3, chord_dir, trail, wake.knot_vehicle,
+                                 cutoff, wake.overlap_core_m, frames, recv_w, wake.sheet)
+                if hi - lo > 1:
+                    lanes.other_bounds(s, lo, hi - 1, mx, my, mz, ro2)
+                    lanes.fix_bounds(s, lo, hi - 1, mx, my, mz, x1, bound_dir, cutoff, wake.overlap_core_m)
+            ex, ey, ez = _other_field_sum(s, v, gamma_formation, wake.surface_vehicle, wake.surface_knot_start,
+                                          wake.surface_panel_start)
+            _add_kutta_joukowski(f, v, air_density * gamma_formation[j], vel[v, 0], vel[v, 1], vel[v, 2], ox, oy,
+                                 oz, ex, ey, ez, lx, ly, lz)
+            _add_kutta_joukowski(fa, v, air_density * gamma_alone[j], vel[v, 0], vel[v, 1], vel[v, 2], ax, ay, az,
+                                 0.0, 0.0, 0.0, lx, ly, lz)
+        for v in range(nv):
+            out_formation[v] = _wind_axis_drag(rot[v], f[v], alpha[v], beta[v])
+            out_alone[v] = _wind_axis_drag(rot[v], fa[v], alpha[v], beta[v])
+        return
     for j in range(n_panels):
         v = wake.panel_vehicle[j]
         k = wake.panel_left_knot[j]

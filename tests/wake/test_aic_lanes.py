@@ -106,3 +106,35 @@ def test_a_lattice_beyond_the_lanes_takes_the_scalar_assembly():
     want = _scalar(w, pos, euler, speed, alpha, beta, True)
     assert all(np.array_equal(_bits(g), _bits(e)) for g, e in zip(got, want))
     assert np.all(np.isfinite(got[1]))
+
+
+@pytest.mark.parametrize("n,tail,sheet,overlap,viscous", [c for c in CASES if c[4]])
+def test_loads_over_lanes_equal_the_scalar_field_bit_for_bit(n, tail, sheet, overlap, viscous):
+    """The saving's Kutta-Joukowski loads take the field at the bound midpoints over the same lanes
+    (benefit.induced_drags_one); they must equal the formation's drag from the scalar field (induced_drag_one) and
+    each vehicle's drag from its separate lone solve (isolated_induced_drag_one), bit for bit."""
+    from formation_env.wake.benefit import induced_drag_one, induced_drags_one, isolated_induced_drag_one
+    from formation_env.wake.kernels import evaluate_one
+
+    w = _arrays(n, tail, sheet, overlap, viscous)
+    vehicle = aerosonde(tailplane=tail)
+    alone = wake_arrays(WakeModel([vehicle], sheet=sheet, overlap_core=1.0 if overlap else 0.0, viscous_aic=viscous),
+                        np.zeros(3))
+    rng = np.random.default_rng(77 + n + 10 * tail + 100 * sheet + 1000 * overlap)
+    for trial in range(6):
+        pos, euler, speed, alpha, beta = _poses(rng, n, (0.0, 0.02, 0.1, 0.5, 1.5, 3.0)[trial])
+        npn = w.n_panels
+        gamma = np.empty(npn)
+        evaluate_one(pos, euler, speed, alpha, beta, w.knot_x1_b, w.knot_x3_b, w.knot_vehicle, w.knot_surface,
+                     w.surface_origin_b, w.surface_vehicle, w.surface_knot_start, w.surface_panel_start,
+                     w.surface_core_scale, w.panel_left_knot, w.panel_vehicle, w.control_b, w.normal_b, w.aic_static,
+                     w.eval_b, w.grad_w, w.vehicle_panel_start, w.cutoff_m, w.core_mode, w.aic_core_mode,
+                     w.kinematic_viscosity, gamma, np.empty((npn, 3)), *[np.empty((n, 3)) for _ in range(4)],
+                     w.overlap_core_m, w.sheet)
+        both_form, both_alone = np.empty(n), np.empty(n)
+        induced_drags_one(w, alone, pos, euler, speed, alpha, beta, gamma, both_form, both_alone)
+        d_form = np.empty(n)
+        induced_drag_one(w, gamma, pos, euler, speed, alpha, beta, d_form)
+        assert np.array_equal(_bits(both_form), _bits(d_form)), trial
+        for v in range(n):
+            assert both_alone[v] == isolated_induced_drag_one(alone, v, pos, euler, speed, alpha, beta), (trial, v)
