@@ -30,7 +30,6 @@ from . import lanes
 from .arrays import evaluate_formation
 from .aic import assemble_and_solve, lu_solve_inplace
 from .biot_savart import branch, leg, point_to_knots, sheet_strip_frames
-from .field import knot_strength
 from .kernels import CORE_NONE, field_velocity, posed_lattice
 from .residual import add_saving_residual
 
@@ -160,8 +159,14 @@ def _own_field_pair(px, py, pz, v, x1, x3, bound_dir, chord_dir, trail, gamma, g
         p0 = surface_panel_start[s]
         point_to_knots(px, py, pz, x1, x3, k0, k1, r1, inv1, r3, inv3)
         for k in range(k0, k1):
-            g = knot_strength(gamma, p0, k, k0, k1)
-            g2 = knot_strength(gamma2, p0, k, k0, k1)
+            g = 0.0
+            g2 = 0.0
+            if k < k1 - 1:
+                g += gamma[p0 + (k - k0)]
+                g2 += gamma2[p0 + (k - k0)]
+            if k > k0:
+                g -= gamma[p0 + (k - k0) - 1]
+                g2 -= gamma2[p0 + (k - k0) - 1]
             if g != 0.0 or g2 != 0.0:
                 lx, ly, lz = leg(t[0], t[1], t[2], r3[k, 0], r3[k, 1], r3[k, 2], inv3[k], cutoff, 0.0)
                 sx, sy, sz = branch(chord_dir[k, 0], chord_dir[k, 1], chord_dir[k, 2], r3[k, 0], r3[k, 1], r3[k, 2],
@@ -205,8 +210,14 @@ def _own_pair_sum(s, v, gamma, gamma2, surface_vehicle, surface_knot_start, surf
         k1 = surface_knot_start[srf + 1]
         p0 = surface_panel_start[srf]
         for k in range(k0, k1):
-            g = knot_strength(gamma, p0, k, k0, k1)
-            g2 = knot_strength(gamma2, p0, k, k0, k1)
+            g = 0.0
+            g2 = 0.0
+            if k < k1 - 1:
+                g += gamma[p0 + (k - k0)]
+                g2 += gamma2[p0 + (k - k0)]
+            if k > k0:
+                g -= gamma[p0 + (k - k0) - 1]
+                g2 -= gamma2[p0 + (k - k0) - 1]
             if g != 0.0 or g2 != 0.0:
                 dx, dy, dz = s[lanes.OLX + k], s[lanes.OLY + k], s[lanes.OLZ + k]
                 if g != 0.0:
@@ -245,7 +256,11 @@ def _other_field_sum(s, v, gamma, surface_vehicle, surface_knot_start, surface_p
         k1 = surface_knot_start[srf + 1]
         p0 = surface_panel_start[srf]
         for k in range(k0, k1):
-            g = knot_strength(gamma, p0, k, k0, k1)
+            g = 0.0
+            if k < k1 - 1:
+                g += gamma[p0 + (k - k0)]
+            if k > k0:
+                g -= gamma[p0 + (k - k0) - 1]
             if g != 0.0:
                 vx += g * s[lanes.LCX + k]
                 vy += g * s[lanes.LCY + k]

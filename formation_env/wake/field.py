@@ -10,21 +10,9 @@ from .biot_savart import (CORE_NONE, branch_cored, core_radius, leg_cored, leg_s
                           sheet_strip_frames)
 from .posing import posed_lattice
 
-__all__ = ["field_velocity", "field_velocity_batch", "knot_strength"]
+__all__ = ["field_velocity", "field_velocity_batch"]
 
 _jit = nb.njit(cache=True, fastmath=False, error_model="numpy")
-
-
-@nb.njit(cache=True, error_model="numpy", inline="always")
-def knot_strength(gamma, p0, k, k0, k1):
-    """Net strength of knot k's L-line on a surface of knots k0..k1-1 whose panels start at p0: +Gamma of the panel
-    on its right, -Gamma of the one on its left (a tip knot has one of them)."""
-    g = 0.0
-    if k < k1 - 1:
-        g += gamma[p0 + (k - k0)]
-    if k > k0:
-        g -= gamma[p0 + (k - k0) - 1]
-    return g
 
 
 @_jit
@@ -66,7 +54,12 @@ def field_velocity(
         p0 = surface_panel_start[s]
         point_to_knots(px, py, pz, x1, x3, k0, k1, r1, inv1, r3, inv3)
         for k in range(k0, k1):
-            g = knot_strength(gamma, p0, k, k0, k1)
+            # Net strength of knot k's L-line: +Gamma of the panel on its right, -Gamma of the left one.
+            g = 0.0
+            if k < k1 - 1:
+                g += gamma[p0 + (k - k0)]
+            if k > k0:
+                g -= gamma[p0 + (k - k0) - 1]
             if g != 0.0:
                 if sheet is not None and frames is not None:
                     lx, ly, lz = leg_sheet_framed(t[0], t[1], t[2], r3[k, 0], r3[k, 1], r3[k, 2], inv3[k], cutoff, rc,

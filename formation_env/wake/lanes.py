@@ -95,83 +95,32 @@ def vehicle_knot_ranges(knot_vehicle, nveh):
     return vk0, vk1
 
 
-@_jit_inline
-def _to_knot(px, py, pz, s, ox, oy, oz, k):
-    """P - X for the knot X in rows (ox, oy, oz) at lane k, |P - X|^2 and 1 / |P - X| (0 at X): the values of
-    :func:`~formation_env.wake.biot_savart.point_to_knots`."""
-    ax = px - s[ox + k]
-    ay = py - s[oy + k]
-    az = pz - s[oz + k]
-    a2 = ax * ax + ay * ay + az * az
-    n = math.sqrt(a2)
-    return ax, ay, az, a2, (1.0 / n if n > 0.0 else 0.0)
-
-
-@_jit_inline
-def _cross(dx, dy, dz, ax, ay, az):
-    """d x a, as the laws write it."""
-    return dy * az - dz * ay, dz * ax - dx * az, dx * ay - dy * ax
-
-
-@_jit_inline
-def _on_line_zero(f, cx, cy, cz, h2):
-    """f c, or zero where the point lies on the branch's line (h^2 < _TINY_H^2), as every law returns there (a
-    select, so that the lane loop stays branch-free)."""
-    on = h2 < _TINY2
-    return (0.0 if on else f * cx), (0.0 if on else f * cy), (0.0 if on else f * cz)
-
-
-@_jit_inline
-def _plain_denominator(h2, c2, cutoff):
-    """4 pi h^2 with h clipped at the Eq. 4.31 cutoff (h2 >= cutoff^2: h^2, else h x cutoff), as the plain laws."""
-    return FOUR_PI * (h2 if h2 >= c2 else math.sqrt(h2) * cutoff)
-
-
-@_jit_inline
-def _plain_leg(s, k, ax, ay, az, inv_a, c2, cutoff):
-    """The vehicle's own trailing leg from X3 (a = P - X3) with the plain law and the cutoff
-    (:func:`~formation_env.wake.biot_savart.leg` with no core)."""
-    tx, ty, tz = s[U_TX + k], s[U_TY + k], s[U_TZ + k]
-    cx, cy, cz = _cross(tx, ty, tz, ax, ay, az)
-    h2 = cx * cx + cy * cy + cz * cz
-    cos_g = (tx * ax + ty * ay + tz * az) * inv_a
-    return _on_line_zero((cos_g + 1.0) / _plain_denominator(h2, c2, cutoff), cx, cy, cz, h2)
-
-
-@_jit_inline
-def _plain_branch(d0, d1, d2, ax, ay, az, inv_a, bx, by, bz, inv_b, c2, cutoff):
-    """A straight branch A -> B (direction d, a = P - A, b = P - B) with the plain law and the cutoff
-    (:func:`~formation_env.wake.biot_savart.branch`)."""
-    cx, cy, cz = _cross(d0, d1, d2, ax, ay, az)
-    h2 = cx * cx + cy * cy + cz * cz
-    cos_g = (d0 * ax + d1 * ay + d2 * az) * inv_a
-    cos_d = (d0 * bx + d1 * by + d2 * bz) * inv_b
-    return _on_line_zero((cos_g - cos_d) / _plain_denominator(h2, c2, cutoff), cx, cy, cz, h2)
-
-
-@_jit_inline
-def _cored_branch_fast(d0, d1, d2, ax, ay, az, inv_a, bx, by, bz, inv_b):
-    """Another vehicle's straight branch A -> B in its fast form (:func:`~formation_env.wake.biot_savart.branch_cored`
-    with the overlap factor 1.0), and rho^2, the squared distance to the segment that decides the factor, and h^2."""
-    cx, cy, cz = _cross(d0, d1, d2, ax, ay, az)
-    h2 = cx * cx + cy * cy + cz * cz
-    sa = d0 * ax + d1 * ay + d2 * az
-    sb = d0 * bx + d1 * by + d2 * bz
-    ma = min(sa, 0.0)
-    mb = max(sb, 0.0)
-    rho2 = h2 + ma * ma + mb * mb
-    ux, uy, uz = _on_line_zero((sa * inv_a - sb * inv_b) / (FOUR_PI * h2), cx, cy, cz, h2)
-    return ux, uy, uz, rho2, h2
-
-
 @_jit
 def own_legs(s, k0, k1, px, py, pz, n0, n1, n2, cutoff):
     """Row LW at knots k0..k1-1 (the receiving vehicle's own): its trailing legs' normal velocity at P (normal n),
     the plain law with the Eq. 4.31 cutoff (:func:`formation_env.wake.biot_savart.leg` with no core) in every lane."""
     c2 = cutoff * cutoff
     for k in range(np.uint64(k0), np.uint64(k1)):
-        ax, ay, az, a2, inv_a = _to_knot(px, py, pz, s, U_X3X, U_X3Y, U_X3Z, k)
-        lx, ly, lz = _plain_leg(s, k, ax, ay, az, inv_a, c2, cutoff)
+        ax = px - s[U_X3X + k]
+        ay = py - s[U_X3Y + k]
+        az = pz - s[U_X3Z + k]
+        nrm = math.sqrt(ax * ax + ay * ay + az * az)
+        inv = 1.0 / nrm if nrm > 0.0 else 0.0
+        tx, ty, tz = s[U_TX + k], s[U_TY + k], s[U_TZ + k]
+        cx = ty * az - tz * ay
+        cy = tz * ax - tx * az
+        cz = tx * ay - ty * ax
+        h2 = cx * cx + cy * cy + cz * cz
+        cos_g = (tx * ax + ty * ay + tz * az) * inv
+        denom = h2 if h2 >= c2 else math.sqrt(h2) * cutoff
+        f = (cos_g + 1.0) / (FOUR_PI * denom)
+        lx = f * cx
+        ly = f * cy
+        lz = f * cz
+        if h2 < _TINY2:
+            lx = 0.0
+            ly = 0.0
+            lz = 0.0
         s[U_LW + k] = lx * n0 + ly * n1 + lz * n2
 
 
@@ -201,19 +150,51 @@ def other_llines(s, k0, k1, px, py, pz, n0, n1, n2, cutoff, ro2, recv_w, sheet_o
     fast form; LM 1.0 where that form is not the law's (a core factor below 1, the sheet region), for
     :func:`fix_llines`. ``ro2`` the overlap core squared (inf: no overlap core, every lane flagged)."""
     for k in range(np.uint64(k0), np.uint64(k1)):
-        bx, by, bz, b2, inv_b = _to_knot(px, py, pz, s, U_X1X, U_X1Y, U_X1Z, k)
-        ax, ay, az, a2, inv_a = _to_knot(px, py, pz, s, U_X3X, U_X3Y, U_X3Z, k)
-        # the trailing leg from X3 (leg_cored with the core max(rc, cutoff)) with its core factors 1.0
+        bx = px - s[U_X1X + k]
+        by = py - s[U_X1Y + k]
+        bz = pz - s[U_X1Z + k]
+        nb_ = math.sqrt(bx * bx + by * by + bz * bz)
+        inv_b = 1.0 / nb_ if nb_ > 0.0 else 0.0
+        ax = px - s[U_X3X + k]
+        ay = py - s[U_X3Y + k]
+        az = pz - s[U_X3Z + k]
+        a2 = ax * ax + ay * ay + az * az
+        na = math.sqrt(a2)
+        inv_a = 1.0 / na if na > 0.0 else 0.0
         t0, t1, t2 = s[U_TX + k], s[U_TY + k], s[U_TZ + k]
-        cx, cy, cz = _cross(t0, t1, t2, ax, ay, az)
+        cx = t1 * az - t2 * ay
+        cy = t2 * ax - t0 * az
+        cz = t0 * ay - t1 * ax
         h2 = cx * cx + cy * cy + cz * cz
         ta = t0 * ax + t1 * ay + t2 * az
         crad = max(s[U_RC + k], cutoff)
         xcore = 1.26 * h2 / (crad * crad)
-        lx, ly, lz = _on_line_zero((ta * inv_a + 1.0) / (FOUR_PI * h2), cx, cy, cz, h2)
-        # the chordwise branch X3 -> X1 (branch_cored: a = P - X3, b = P - X1) with its overlap factor 1.0
-        sx, sy, sz, rho2, g2 = _cored_branch_fast(s[U_CDX + k], s[U_CDY + k], s[U_CDZ + k], ax, ay, az, inv_a,
-                                                  bx, by, bz, inv_b)
+        f = (ta * inv_a + 1.0) / (FOUR_PI * h2)  # the leg's law with its core factor 1.0
+        lx = f * cx
+        ly = f * cy
+        lz = f * cz
+        if h2 < _TINY2:
+            lx = 0.0
+            ly = 0.0
+            lz = 0.0
+        d0, d1, d2 = s[U_CDX + k], s[U_CDY + k], s[U_CDZ + k]
+        ex = d1 * az - d2 * ay
+        ey = d2 * ax - d0 * az
+        ez = d0 * ay - d1 * ax
+        g2 = ex * ex + ey * ey + ez * ez
+        sa = d0 * ax + d1 * ay + d2 * az
+        sb = d0 * bx + d1 * by + d2 * bz
+        ma = min(sa, 0.0)
+        mb = max(sb, 0.0)
+        rho2 = g2 + ma * ma + mb * mb
+        fc = (sa * inv_a - sb * inv_b) / (FOUR_PI * g2)  # the branch's law with its overlap factor 1.0
+        sx = fc * ex
+        sy = fc * ey
+        sz = fc * ez
+        if g2 < _TINY2:
+            sx = 0.0
+            sy = 0.0
+            sz = 0.0
         s[U_I1 + k] = inv_b
         s[U_LW + k] = lx * n0 + ly * n1 + lz * n2
         s[U_CW + k] = sx * n0 + sy * n1 + sz * n2
@@ -261,10 +242,26 @@ def other_bounds(s, k0, k1, px, py, pz, ro2):
     junk, never read) into BX..BZ in its fast form (overlap factor 1.0; :func:`other_llines` must have filled I1),
     BM 1.0 where that is not the law's."""
     for k in range(np.uint64(k0), np.uint64(k1)):
+        d0, d1, d2 = s[U_BDX + k], s[U_BDY + k], s[U_BDZ + k]
         ax, ay, az = px - s[U_X1X + k], py - s[U_X1Y + k], pz - s[U_X1Z + k]
         bx, by, bz = px - s[U_X1X + k + _U1], py - s[U_X1Y + k + _U1], pz - s[U_X1Z + k + _U1]
-        ux, uy, uz, rho2, h2 = _cored_branch_fast(s[U_BDX + k], s[U_BDY + k], s[U_BDZ + k], ax, ay, az,
-                                                  s[U_I1 + k], bx, by, bz, s[U_I1 + k + _U1])
+        cx = d1 * az - d2 * ay
+        cy = d2 * ax - d0 * az
+        cz = d0 * ay - d1 * ax
+        h2 = cx * cx + cy * cy + cz * cz
+        sa = d0 * ax + d1 * ay + d2 * az
+        sb = d0 * bx + d1 * by + d2 * bz
+        ma = min(sa, 0.0)
+        mb = max(sb, 0.0)
+        rho2 = h2 + ma * ma + mb * mb
+        f = (sa * s[U_I1 + k] - sb * s[U_I1 + k + _U1]) / (FOUR_PI * h2)
+        ux = f * cx
+        uy = f * cy
+        uz = f * cz
+        if h2 < _TINY2:
+            ux = 0.0
+            uy = 0.0
+            uz = 0.0
         s[U_BX + k] = ux
         s[U_BY + k] = uy
         s[U_BZ + k] = uz
@@ -322,11 +319,47 @@ def own_field_lanes(s, k0, k1, px, py, pz, cutoff):
     past the last bound lane only within the vehicle's own knots."""
     c2 = cutoff * cutoff
     for k in range(np.uint64(k0), np.uint64(k1)):
-        bx, by, bz, b2, inv_b = _to_knot(px, py, pz, s, U_X1X, U_X1Y, U_X1Z, k)
-        ax, ay, az, a2, inv_a = _to_knot(px, py, pz, s, U_X3X, U_X3Y, U_X3Z, k)
-        lx, ly, lz = _plain_leg(s, k, ax, ay, az, inv_a, c2, cutoff)
-        sx, sy, sz = _plain_branch(s[U_CDX + k], s[U_CDY + k], s[U_CDZ + k], ax, ay, az, inv_a, bx, by, bz, inv_b, c2,
-                                   cutoff)
+        bx = px - s[U_X1X + k]
+        by = py - s[U_X1Y + k]
+        bz = pz - s[U_X1Z + k]
+        nb_ = math.sqrt(bx * bx + by * by + bz * bz)
+        inv_b = 1.0 / nb_ if nb_ > 0.0 else 0.0
+        ax = px - s[U_X3X + k]
+        ay = py - s[U_X3Y + k]
+        az = pz - s[U_X3Z + k]
+        na = math.sqrt(ax * ax + ay * ay + az * az)
+        inv_a = 1.0 / na if na > 0.0 else 0.0
+        tx, ty, tz = s[U_TX + k], s[U_TY + k], s[U_TZ + k]
+        cx = ty * az - tz * ay
+        cy = tz * ax - tx * az
+        cz = tx * ay - ty * ax
+        h2 = cx * cx + cy * cy + cz * cz
+        cos_g = (tx * ax + ty * ay + tz * az) * inv_a
+        denom = h2 if h2 >= c2 else math.sqrt(h2) * cutoff
+        f = (cos_g + 1.0) / (FOUR_PI * denom)
+        lx = f * cx
+        ly = f * cy
+        lz = f * cz
+        if h2 < _TINY2:
+            lx = 0.0
+            ly = 0.0
+            lz = 0.0
+        d0, d1, d2 = s[U_CDX + k], s[U_CDY + k], s[U_CDZ + k]
+        ex = d1 * az - d2 * ay
+        ey = d2 * ax - d0 * az
+        ez = d0 * ay - d1 * ax
+        g2 = ex * ex + ey * ey + ez * ez
+        cg = (d0 * ax + d1 * ay + d2 * az) * inv_a
+        cd = (d0 * bx + d1 * by + d2 * bz) * inv_b
+        denom = g2 if g2 >= c2 else math.sqrt(g2) * cutoff
+        fc = (cg - cd) / (FOUR_PI * denom)
+        sx = fc * ex
+        sy = fc * ey
+        sz = fc * ez
+        if g2 < _TINY2:
+            sx = 0.0
+            sy = 0.0
+            sz = 0.0
         s[U_OI1 + k] = inv_b
         s[U_OLX + k] = sx - lx
         s[U_OLY + k] = sy - ly
@@ -340,10 +373,24 @@ def own_field_bounds(s, k0, k1, px, py, pz, cutoff):
     the lane of a surface's last knot is junk."""
     c2 = cutoff * cutoff
     for k in range(np.uint64(k0), np.uint64(k1)):
+        d0, d1, d2 = s[U_BDX + k], s[U_BDY + k], s[U_BDZ + k]
         ax, ay, az = px - s[U_X1X + k], py - s[U_X1Y + k], pz - s[U_X1Z + k]
         bx, by, bz = px - s[U_X1X + k + _U1], py - s[U_X1Y + k + _U1], pz - s[U_X1Z + k + _U1]
-        ux, uy, uz = _plain_branch(s[U_BDX + k], s[U_BDY + k], s[U_BDZ + k], ax, ay, az, s[U_OI1 + k], bx, by, bz,
-                                   s[U_OI1 + k + _U1], c2, cutoff)
+        cx = d1 * az - d2 * ay
+        cy = d2 * ax - d0 * az
+        cz = d0 * ay - d1 * ax
+        h2 = cx * cx + cy * cy + cz * cz
+        cg = (d0 * ax + d1 * ay + d2 * az) * s[U_OI1 + k]
+        cd = (d0 * bx + d1 * by + d2 * bz) * s[U_OI1 + k + _U1]
+        denom = h2 if h2 >= c2 else math.sqrt(h2) * cutoff
+        f = (cg - cd) / (FOUR_PI * denom)
+        ux = f * cx
+        uy = f * cy
+        uz = f * cz
+        if h2 < _TINY2:
+            ux = 0.0
+            uy = 0.0
+            uz = 0.0
         s[U_OBX + k] = ux
         s[U_OBY + k] = uy
         s[U_OBZ + k] = uz
