@@ -313,10 +313,9 @@ def other_panel_row(s, aic, vcross, j, p0, k0, npan, n0, n1, n2, store):
 @_jit
 def own_field_lanes(s, k0, k1, px, py, pz, cutoff):
     """A vehicle's own knots k0..k1-1 seen from P with the solve's law (plain Biot-Savart, the Eq. 4.31 cutoff, no
-    core; :func:`~formation_env.wake.biot_savart.leg` and :func:`~formation_env.wake.biot_savart.branch`): OLX..OLZ
-    the L-line vector (chordwise - leg) and OBX..OBZ the bound branch k -> k + 1 (junk at a surface's last knot),
-    every lane exact (the laws' only other case, a point on the line, is a select). ``k1`` may extend one knot
-    past the last bound lane only within the vehicle's own knots."""
+    core; :func:`~formation_env.wake.biot_savart.leg` and :func:`~formation_env.wake.biot_savart.branch`): OI1 =
+    1 / |P - X1| and OLX..OLZ the L-line vector (chordwise - leg), every lane exact (the laws' only other case, a
+    point on the line, is a select); the bound branches are :func:`own_field_bounds`'s."""
     c2 = cutoff * cutoff
     for k in range(np.uint64(k0), np.uint64(k1)):
         bx = px - s[U_X1X + k]
