@@ -58,7 +58,8 @@ def policy_metadata(path: Path) -> dict:
             return {"algo": data.get("algo"), "action_mode": data.get("action_mode"), "scenario": data.get("scenario"),
                     "control_hz": (data.get("env_kwargs") or {}).get("control_hz", 10.0),
                     "action_guard": (data.get("action_guard") if isinstance(data.get("action_guard"), dict)
-                                     else bool(data.get("action_guard", False)))}
+                                     else bool(data.get("action_guard", False))),
+                    "residual_on": data.get("residual_on")}
     return {}
 
 
@@ -112,6 +113,17 @@ def load_policy(spec: str, *, action_mode: str | None = None, name: str | None =
     def act(obs: np.ndarray) -> np.ndarray:
         return model.predict(obs, deterministic=True)[0]
 
+    reset = None
+    if meta.get("residual_on") is not None:  # a residual on a classical agent: the agent is part of the policy
+        if mode != "setpoints":
+            raise ValueError(f"policy {spec!r}: its metadata's residual_on adds to set-points, but it is flown with "
+                             f"{mode!r} actions")
+        from ..sb3.residual import residual_policy
+
+        try:
+            act, reset = residual_policy(act, meta["residual_on"])
+        except ValueError as exc:
+            raise ValueError(f"policy {spec!r}: its metadata's {exc}") from None
     if meta.get("action_guard"):  # trained with the separation guard in the loop: it is part of the policy
         if mode != "setpoints":
             raise ValueError(f"policy {spec!r}: its metadata asks for the separation guard, which filters set-point "
@@ -122,4 +134,4 @@ def load_policy(spec: str, *, action_mode: str | None = None, name: str | None =
             act = guarded(act, meta["action_guard"])  # True: the default gains; a mapping: the sidecar's
         except ValueError as exc:
             raise ValueError(f"policy {spec!r}: its metadata's action_guard: {exc}") from None
-    return EvalPolicy(name or path.stem, mode, act, float(meta.get("control_hz", 10.0) or 10.0), str(path))
+    return EvalPolicy(name or path.stem, mode, act, float(meta.get("control_hz", 10.0) or 10.0), str(path), reset=reset)

@@ -47,7 +47,8 @@ def publish(run_dir: str | Path, name: str, *, eval_json: str | Path | None = No
         best["action_guard"] = guard
     meta = {
         "env": {**{k: best[k] for k in ("algo", "scenario", "action_mode", "control_hz")},
-                **({"action_guard": best["action_guard"]} if best.get("action_guard") else {})},
+                **({"action_guard": best["action_guard"]} if best.get("action_guard") else {}),
+                **({"residual_on": best["residual_on"]} if best.get("residual_on") else {})},
         "command": cfg.get("command"),
         "seed": c["seed"],
         "num_timesteps": best["num_timesteps"],

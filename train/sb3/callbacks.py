@@ -87,11 +87,16 @@ def build_callbacks(cfg: TrainConfig, run_dir: Path, state: dict, log: Callable[
         def evaluate(self) -> None:
             model = self.model
             act = lambda o: model.predict(o, deterministic=True)[0]  # noqa: E731
+            reset = None
+            if cfg.residual_on is not None:
+                from .residual import residual_policy
+
+                act, reset = residual_policy(act, cfg.residual_on)
             if cfg.action_guard:
                 from .guard import guarded
 
                 act = guarded(act, cfg.action_guard)
-            summ = summarise(run_episodes(FunctionPolicy(act), self.config, self.seeds))
+            summ = summarise(run_episodes(FunctionPolicy(act, reset), self.config, self.seeds))
             score = selection_score(summ, cfg.selection_collision_cost)
             entry = {"num_timesteps": int(self.num_timesteps), "score": score, **summ}
             state["evaluations"].append(entry)

@@ -46,7 +46,7 @@ ALGOS = ("ppo", "sac", "td3")
 
 _TRAIN_KEYS = {"n_timesteps", "n_formations", "policy", "policy_kwargs", "env_kwargs", "eval_freq",
                "eval_episodes", "checkpoint_freq", "torch_threads", "reward_scale", "init_policy", "action_guard",
-               "selection_collision_cost"}
+               "selection_collision_cost", "residual_on"}
 _ALGO_KEYS = {
     "ppo": {"learning_rate", "n_steps", "batch_size", "n_epochs", "gamma", "gae_lambda", "clip_range",
             "clip_range_vf", "normalize_advantage", "ent_coef", "vf_coef", "max_grad_norm", "use_sde",
@@ -247,6 +247,10 @@ class TrainConfig:
     # the model selection's price of a validation episode that ends in a collision or crash, in the selection
     # score's units per episode (train.evaluation.summary.selection_score); None: any collision disqualifies
     selection_collision_cost: float | None = None
+    # a residual policy on a classical agent (train.sb3.residual): {agent: station_keeper, scale: s}, the learner's
+    # action times s added to the agent's set-points in training, in validation and wherever the published policy
+    # flies (its sidecar says so); None: the learner's action is the set-point itself
+    residual_on: dict | None = None
 
     def __post_init__(self) -> None:
         from formation_env.scenarios import scenario_names
@@ -308,6 +312,18 @@ class TrainConfig:
             if get_scenario(self.scenario).safe_box_b is not None:
                 raise ValueError(f"action_guard: scenario {self.scenario!r} has a safe box, whose set-point ranges are not "
                                  "the guard's +-5 m (use action_guard: false)")
+        if self.residual_on is not None:
+            from .residual import check_residual_on
+
+            object.__setattr__(self, "residual_on", check_residual_on(self.residual_on))
+            if self.action_mode != "setpoints":
+                raise ValueError(f"residual_on adds to an agent's set-points; action mode {self.action_mode!r} has none "
+                                 "(use --action-mode setpoints)")
+            from formation_env.scenarios import get_scenario
+
+            if get_scenario(self.scenario).safe_box_b is not None:
+                raise ValueError(f"residual_on: scenario {self.scenario!r} has a safe box, whose set-point ranges are not "
+                                 "the station keeper's +-5 m")
         c = self.selection_collision_cost
         if c is not None and (isinstance(c, bool) or not isinstance(c, (int, float)) or not math.isfinite(c)
                               or not 0 <= c <= 1e3):

@@ -115,6 +115,10 @@ def make_train_env(cfg: TrainConfig, seed: int):
         from .guard import GuardedVecEnv
 
         env = GuardedVecEnv(env, cfg.action_guard)
+    if cfg.residual_on is not None:  # the agent's set-points plus the learner's (outside the guard: it filters the sum)
+        from .residual import ResidualVecEnv
+
+        env = ResidualVecEnv(env, cfg.residual_on)
     if cfg.policy == "CentralCriticPolicy":  # MAPPO: every row gets its formation's agent-specific global state
         from .central_critic import GlobalStateVecEnv
 
