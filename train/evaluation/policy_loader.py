@@ -12,7 +12,7 @@ from ..config import ACTION_MODES
 from .policy import EvalPolicy
 from ..sb3.config import ALGOS
 
-__all__ = ["load_policy"]
+__all__ = ["CLASSICAL_AGENTS", "classical_agent", "load_policy"]
 
 
 def _pid_policy() -> EvalPolicy:
@@ -20,25 +20,29 @@ def _pid_policy() -> EvalPolicy:
 
 
 # the classical agents of the top-level ``agents`` package: spec -> (module, class), imported only when asked for
-_AGENTS = {"pid_formation": ("agents.pid_formation", "PIDFormation"),
-           "station_keeper": ("agents.station_keeper", "StationKeeper")}
+CLASSICAL_AGENTS = {"pid_formation": ("agents.pid_formation", "PIDFormation"),
+                    "station_keeper": ("agents.station_keeper", "StationKeeper")}
 
 
-def _agent_policy(spec: str) -> EvalPolicy:
-    """A classical agent of ``agents/`` (:data:`_AGENTS`: ``pid_formation``, the formation-keeping controller;
-    ``station_keeper``, the cross-track station keeper), imported only here: a stateful agent whose
-    ``reset(n_rows)`` runs before every batch of episodes."""
+def classical_agent(spec: str):
+    """A fresh instance of the classical agent ``spec`` of ``agents/`` (:data:`CLASSICAL_AGENTS`: ``pid_formation``,
+    the formation-keeping controller; ``station_keeper``, the cross-track station keeper), imported only here: a
+    stateful, batched agent (``reset(n_rows)``, ``act(obs)``, ``action_mode``, ``control_hz``)."""
     import importlib
 
-    module, cls = _AGENTS[spec]
+    module, cls = CLASSICAL_AGENTS[spec]
     try:
         agent_class = getattr(importlib.import_module(module), cls)
     except ModuleNotFoundError as exc:
         if exc.name not in (module, "agents"):
             raise
         raise ValueError(f"policy {spec!r} needs {module.replace('.', '/')}.py, which this checkout does not have") from None
+    return agent_class()
 
-    agent = agent_class()
+
+def _agent_policy(spec: str) -> EvalPolicy:
+    """:func:`classical_agent` as an evaluation policy, whose ``reset(n_rows)`` runs before every batch of episodes."""
+    agent = classical_agent(spec)
     return EvalPolicy(spec, str(agent.action_mode), agent.act, float(agent.control_hz), reset=agent.reset)
 
 
@@ -70,7 +74,7 @@ def load_policy(spec: str, *, action_mode: str | None = None, name: str | None =
     directory of ``formation-env train --backend rllib`` (its metadata fixes the action mode)."""
     if spec == "pid":
         return _pid_policy()
-    if spec in _AGENTS:
+    if spec in CLASSICAL_AGENTS:
         return _agent_policy(spec)
     path = Path(spec)
     if path.is_dir():

@@ -19,8 +19,9 @@ from stable_baselines3.common.vec_env import VecEnvWrapper
 
 __all__ = ["RESIDUAL_AGENTS", "check_residual_on", "residual_policy", "ResidualVecEnv"]
 
-#: the agents a residual may be learnt on: name -> (module, class); each flies ``setpoints``
-RESIDUAL_AGENTS = {"station_keeper": ("agents.station_keeper", "StationKeeper")}
+#: the classical agents (:data:`train.evaluation.policy_loader.CLASSICAL_AGENTS`) a residual may be learnt on: those
+#: that fly ``setpoints``
+RESIDUAL_AGENTS = ("station_keeper",)
 
 
 def check_residual_on(spec) -> dict:
@@ -38,11 +39,10 @@ def check_residual_on(spec) -> dict:
 
 
 def _agent(spec: dict):
-    import importlib
+    from ..evaluation.policy_loader import classical_agent
 
-    module, cls = RESIDUAL_AGENTS[spec["agent"]]
-    agent = getattr(importlib.import_module(module), cls)()
-    if agent.action_mode != "setpoints":  # pragma: no cover - the table lists set-point agents only
+    agent = classical_agent(spec["agent"])
+    if agent.action_mode != "setpoints":  # pragma: no cover - RESIDUAL_AGENTS lists set-point agents only
         raise ValueError(f"residual_on: {spec['agent']} flies {agent.action_mode!r}, not set-points")
     return agent
 
