@@ -39,6 +39,10 @@ neighbours                  6(V-1)  slog 3 m, 1 m/s   m, m/s     each other UAV 
                                                                  ``neighbour_count`` k: the k UAVs whose slots are
                                                                  nearest the agent's, nearest first (a missing one:
                                                                  1 km behind, same velocity)
+neighbour_wind (option)     3(V-1)  slog 1 m/s        m/s        with ``EnvConfig(neighbour_wind=True)`` only: each
+                            or 3k                                neighbour of ``neighbours`` (same order): its
+                                                                 ambient wind minus the agent's, slot frame (a
+                                                                 missing one: 0)
 ==========================  ======  ================  =========  ==================================================
 """
 
@@ -56,7 +60,7 @@ __all__ = ["OBS_CLIP", "GROUPS", "SCHEDULE_SIZE", "CONTROLLER_STATE_SIZE", "obse
 
 GROUPS = ("air_data", "attitude", "rates", "altitude", "slot_position_error", "slot_velocity_error",
           "induced_wind", "induced_rotation", "ambient_wind", "engine", "previous_action", "slot_schedule",
-          "controller_state", "neighbours")
+          "controller_state", "neighbours", "neighbour_wind")
 SCALES = (ALTITUDE_SCALE_M, CONTROLLER_STATE_SCALE, NEIGHBOUR_POSITION_SCALE_M, OMEGA_REF, POSITION_SCALE_M,
           VELOCITY_SCALE_MPS, WIND_SCALE_MPS)
 
@@ -66,10 +70,12 @@ def slog(x, scale):
     return np.sign(x) * np.log1p(np.abs(x) / scale)
 
 
-def to_dict(vector: np.ndarray, n_vehicles: int, neighbour_count: int | None = None) -> dict[str, np.ndarray]:
-    """Split one agent's flat observation into the named groups (``neighbour_count`` as the env's)."""
+def to_dict(vector: np.ndarray, n_vehicles: int, neighbour_count: int | None = None,
+            neighbour_wind: bool = False) -> dict[str, np.ndarray]:
+    """Split one agent's flat observation into the named groups (``neighbour_count``, ``neighbour_wind`` as the
+    env's)."""
     out, k = {}, 0
-    for name, size in group_sizes(n_vehicles, neighbour_count).items():
+    for name, size in group_sizes(n_vehicles, neighbour_count, neighbour_wind).items():
         if size:
             out[name] = vector[..., k:k + size]
         k += size

@@ -327,6 +327,11 @@ class EnvConfig:
         agent's, nearest first (6 k values whatever the formation's size, so one policy flies an echelon of 3,
         a vee of 5 and a vee of 9; a neighbour the formation lacks reads as a UAV 1 km behind); None (default):
         the scenario's (2 in the N-UAV close formations echelon3, vee5, vee9; 0 elsewhere).
+    neighbour_wind: False (default) or True: the observation ends with the ``neighbour_wind`` group, each
+        observed neighbour's ambient wind (steady + gusts + turbulence) minus the agent's own, in the agent's slot
+        frame (3 values per neighbour; what formation members share over a data link). In a frozen field the UAV
+        ahead meets now the air the agent meets a fraction of a second later, and the difference is what moves
+        it (and its wake) relative to the agent.
     """
 
     scenario: object = "formation_keeping"  # a scenario name or a formation_env.scenarios.Scenario
@@ -343,6 +348,7 @@ class EnvConfig:
     wake_coupling: str | None = None
     wake_fidelity: str | None = None
     neighbour_count: int | None = None
+    neighbour_wind: bool = False
     throttle_max: float = 1.0
     leader_reference: str | None = None
     reward: RewardWeights = field(default_factory=RewardWeights)
@@ -410,6 +416,9 @@ class EnvConfig:
                 raise ValueError(f"EnvConfig: neighbour_count must be None (the scenario's), 0 (every other UAV) or an "
                                  f"integer in 1..64, got {k!r}")
             object.__setattr__(self, "neighbour_count", int(k))
+        if not isinstance(self.neighbour_wind, (bool, np.bool_)):
+            raise ValueError(f"EnvConfig: neighbour_wind must be True or False, got {self.neighbour_wind!r}")
+        object.__setattr__(self, "neighbour_wind", bool(self.neighbour_wind))
         if not isinstance(self.compute_benefit, (bool, np.bool_)):
             raise ValueError(f"EnvConfig: compute_benefit must be True or False, got {self.compute_benefit!r}")
         object.__setattr__(self, "compute_benefit", bool(self.compute_benefit))

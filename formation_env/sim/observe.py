@@ -56,12 +56,14 @@ def signed_log(x, scale):
 
 @_jit
 def observe_formation(x, induced, omega, amb, pd, vd, prev, schedule, cstate, trim_airspeed, altitude, air_params,
-                      vel, chi, out, neighbour_count=0):
+                      vel, chi, out, neighbour_count=0, neighbour_wind=False):
     """Observation rows (V, D) of one formation into ``out``. x (V, 16); induced, amb (V, 3) NED m/s;
     omega (V, 3) body rad/s; pd, vd (V, 3) demands; prev (V, 4); schedule (V, 10); cstate (V, 7);
     vel (V, 3), chi (V,) scratch. ``neighbour_count`` 0: the neighbours group holds every other UAV in
     index order; k > 0: the k UAVs whose demanded positions (slots) are nearest the agent's, nearest first
-    (ties by index), and :data:`ABSENT_NEIGHBOUR_M` behind for each of the k that the formation lacks."""
+    (ties by index), and :data:`ABSENT_NEIGHBOUR_M` behind for each of the k that the formation lacks.
+    ``neighbour_wind``: then the ``neighbour_wind`` group, each observed neighbour's ambient wind minus the
+    agent's own (the neighbours' order; slot frame; zero for a missing one)."""
     nv = x.shape[0]
     wind = np.zeros(12)
     for a in range(nv):
@@ -141,6 +143,20 @@ def observe_formation(x, induced, omega, amb, pd, vd, prev, schedule, cstate, tr
             o[k + 4] = signed_log(ty, VELOCITY_SCALE_MPS)
             o[k + 5] = signed_log(dz, VELOCITY_SCALE_MPS)
             k += 6
+        if neighbour_wind:
+            # the gust the neighbour meets against the agent's own: what moves it (and its wake) relative to
+            # the agent; in a frozen field the one ahead meets now what the agent meets a fraction of a second on
+            for m in range(m_n):
+                j = _neighbour(pd, a, m, neighbour_count)
+                if j < 0:
+                    o[k], o[k + 1], o[k + 2] = 0.0, 0.0, 0.0
+                else:
+                    dx, dy, dz = amb[j, 0] - amb[a, 0], amb[j, 1] - amb[a, 1], amb[j, 2] - amb[a, 2]
+                    tx, ty = ned_to_track_xy(c, s, dx, dy)
+                    o[k] = signed_log(tx, WIND_SCALE_MPS)
+                    o[k + 1] = signed_log(ty, WIND_SCALE_MPS)
+                    o[k + 2] = signed_log(dz, WIND_SCALE_MPS)
+                k += 3
         for k in range(o.shape[0]):
             o[k] = _clean(o[k])
 
@@ -252,17 +268,21 @@ def reward_formation(w, error, previous_error, action, previous_action, saving, 
         out[a, 9] = -w.hold if (w.hold > 0.0 and in_hold and not err < w.hold_radius_m) else 0.0
 
 
-def group_sizes(n_vehicles: int, neighbour_count: int | None = None) -> dict[str, int]:
+def group_sizes(n_vehicles: int, neighbour_count: int | None = None, neighbour_wind: bool = False) -> dict[str, int]:
     """Size of each observation group (formation_env.envs.observations documents them), for V UAVs
-    (``neighbour_count`` k: k neighbours observed, whatever V)."""
+    (``neighbour_count`` k: k neighbours observed, whatever V; ``neighbour_wind``: their ambient winds too)."""
     n = n_vehicles - 1 if not neighbour_count else int(neighbour_count)
-    return {"air_data": 3, "attitude": 3, "rates": 3, "altitude": 1, "slot_position_error": 3,
-            "slot_velocity_error": 3, "induced_wind": 3, "induced_rotation": 3, "ambient_wind": 3, "engine": 1,
-            "previous_action": 4, "slot_schedule": SCHEDULE_SIZE, "controller_state": CONTROLLER_STATE_SIZE,
-            "neighbours": 6 * n}
+    sizes = {"air_data": 3, "attitude": 3, "rates": 3, "altitude": 1, "slot_position_error": 3,
+             "slot_velocity_error": 3, "induced_wind": 3, "induced_rotation": 3, "ambient_wind": 3, "engine": 1,
+             "previous_action": 4, "slot_schedule": SCHEDULE_SIZE, "controller_state": CONTROLLER_STATE_SIZE,
+             "neighbours": 6 * n}
+    if neighbour_wind:
+        sizes["neighbour_wind"] = 3 * n
+    return sizes
 
 
-def observation_size(n_vehicles: int, neighbour_count: int | None = None) -> int:
+def observation_size(n_vehicles: int, neighbour_count: int | None = None, neighbour_wind: bool = False) -> int:
     """Length D of one UAV's flat observation vector in a formation of V UAVs (with ``neighbour_count`` k:
-    the same as in a formation of k + 1 UAVs observing all, whatever V)."""
-    return sum(group_sizes(n_vehicles, neighbour_count).values())
+    the same as in a formation of k + 1 UAVs observing all, whatever V; ``neighbour_wind`` adds 3 per
+    observed neighbour)."""
+    return sum(group_sizes(n_vehicles, neighbour_count, neighbour_wind).values())

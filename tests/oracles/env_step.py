@@ -34,10 +34,11 @@ def _to_track(vec, chi):
 
 def build_observations_reference(state, induced_ned, omega_body, ambient_ned, turbulence_body, position_demand,
                                  velocity_demand, previous_action, schedule, controller_state, trim_airspeed,
-                                 scenario_altitude, neighbour_count: int = 0) -> np.ndarray:
+                                 scenario_altitude, neighbour_count: int = 0, neighbour_wind: bool = False) -> np.ndarray:
     """The same observations in plain numpy (the readable definition; tests hold the compiled one to it).
     ``neighbour_count`` k > 0: the k others whose demanded positions are nearest the agent's (a stable sort:
-    ties by index), a missing one 1 km behind at the agent's velocity."""
+    ties by index), a missing one 1 km behind at the agent's velocity. ``neighbour_wind``: then each of those
+    neighbours' ambient wind minus the agent's, slot frame (a missing one: 0)."""
     b, v = state.shape[:2]
     flat = state.reshape(b * v, N_STATES)
     with np.errstate(all="ignore"):
@@ -68,6 +69,7 @@ def build_observations_reference(state, induced_ned, omega_body, ambient_ned, tu
         k = v - 1 if neighbour_count == 0 else neighbour_count
         if k > 0:
             neigh = np.empty((b, v, 6 * k))
+            nwind = np.zeros((b, v, 3 * k))
             for f in range(b):
                 for i in range(v):
                     others = [j for j in range(v) if j != i]
@@ -80,7 +82,11 @@ def build_observations_reference(state, induced_ned, omega_body, ambient_ned, tu
                     absent = np.zeros((k - len(others), 6))
                     absent[:, 0] = slog(-1000.0, NEIGHBOUR_POSITION_SCALE_M)
                     neigh[f, i] = np.concatenate([rows, absent]).reshape(-1)
+                    rel_w = slog(_to_track(ambient_total[f, others] - ambient_total[f, i], chi[f, i]), WIND_SCALE_MPS)
+                    nwind[f, i, :3 * len(others)] = rel_w.reshape(-1)
             parts.append(neigh)
+            if neighbour_wind:
+                parts.append(nwind)
         obs = np.concatenate(parts, axis=-1)
     obs = np.nan_to_num(obs, nan=0.0, posinf=OBS_CLIP, neginf=-OBS_CLIP)
     return np.clip(obs, -OBS_CLIP, OBS_CLIP)

@@ -85,14 +85,14 @@ def test_every_formation_observes_one_size_and_the_nearest_slots():
     assert _neighbour(pd, 1, 4, 5) == -1  # more asked than the formation has
 
 
-@pytest.mark.parametrize("k", [0, 2, 6])
-def test_compiled_neighbours_equal_the_numpy_definition(k):
+@pytest.mark.parametrize("k,wind", [(0, False), (2, False), (6, False), (0, True), (2, True), (6, True)])
+def test_compiled_neighbours_equal_the_numpy_definition(k, wind):
     """The compiled observation with ``neighbour_count`` k equals the numpy definition (tests/oracles), along a
     randomised vee episode: every other UAV (0), the nearest two by slot, and more than the vee has (6: two
-    absent, 1 km behind)."""
+    absent, 1 km behind); with and without the neighbours' winds."""
     from tests.oracles.env_step import build_observations_reference, slot_schedule_features
 
-    env = formation_env.parallel_env("vee5", action_mode="setpoints", neighbour_count=k,
+    env = formation_env.parallel_env("vee5", action_mode="setpoints", neighbour_count=k, neighbour_wind=wind,
                                      randomisation=Randomisation(initial_offset_m=3.0, turbulence_sigma_mps=1.0))
     env.reset(seed=11)
     rng = np.random.default_rng(2)
@@ -103,9 +103,37 @@ def test_compiled_neighbours_equal_the_numpy_definition(k):
         ref = build_observations_reference(e.aircraft, e.induced, e.omega, e.ambient_wind(), np.zeros_like(e.induced),
                                            e.position_demand, e.velocity_demand, e.state.previous_action, sched,
                                            e.state.controller, e.scenario.airspeed_mps, e.scenario.altitude_m,
-                                           neighbour_count=k)
-        assert ref.shape[-1] == observation_size(5, k) == env.observation_space("uav_1").shape[0]
+                                           neighbour_count=k, neighbour_wind=wind)
+        assert ref.shape[-1] == observation_size(5, k, wind) == env.observation_space("uav_1").shape[0]
         np.testing.assert_allclose(e.output.observation, ref, rtol=0, atol=1e-12)
+
+
+def test_neighbour_wind_is_the_gust_difference_and_changes_nothing_else():
+    """With ``neighbour_wind`` the observation is the one without it plus the neighbours' ambient winds minus the
+    agent's (in turbulence not zero, in calm air zero), and the flight is the same bit for bit."""
+    from formation_env.envs.observations import to_dict
+
+    for sigma in (1.0, 0.0):
+        envs = [formation_env.parallel_env("echelon3", action_mode="setpoints", neighbour_wind=w,
+                                           randomisation=Randomisation(turbulence_sigma_mps=sigma)) for w in (False, True)]
+        for env in envs:
+            env.reset(seed=5)
+        size = observation_size(3, 2)
+        assert envs[1].observation_space("uav_1").shape[0] == size + 6
+        rng = np.random.default_rng(0)
+        spread = 0.0
+        for _ in range(20):
+            act = {a: rng.uniform(-1, 1, 4) for a in envs[0].agents}
+            (o0, *_), (o1, *_) = (env.step(act) for env in envs)
+            for a in o0:
+                np.testing.assert_array_equal(o1[a][:size], o0[a])
+                d = to_dict(o1[a], 3, 2, True)
+                assert d["neighbour_wind"].shape == (6,)
+                spread = max(spread, float(np.abs(d["neighbour_wind"]).max()))
+        if sigma > 0:
+            assert spread > 1e-3
+        else:
+            assert spread == 0.0
 
 
 def test_neighbour_count_is_checked():
@@ -113,6 +141,8 @@ def test_neighbour_count_is_checked():
         EnvConfig(scenario="vee5", neighbour_count=-1)
     with pytest.raises(ValueError, match="neighbour_count"):
         EnvConfig(scenario="vee5", neighbour_count=True)
+    with pytest.raises(ValueError, match="neighbour_wind must be True or False, got 1"):
+        EnvConfig(scenario="vee5", neighbour_wind=1)
 
 
 def test_the_tasks_are_registered_with_their_reference():

@@ -25,3 +25,5 @@ class EvalPolicy:
     reset: Callable[[int], None] | None = None
     """Called once by :func:`run_episodes` with the number of rows (formations x learning UAVs)
     before the first decision (stateful policies: a PID's integrators)."""
+    neighbour_wind: bool = False
+    """Trained observing its neighbours' winds (EnvConfig.neighbour_wind): flown with that observation."""

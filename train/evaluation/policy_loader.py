@@ -63,7 +63,8 @@ def policy_metadata(path: Path) -> dict:
                     "control_hz": (data.get("env_kwargs") or {}).get("control_hz", 10.0),
                     "action_guard": (data.get("action_guard") if isinstance(data.get("action_guard"), dict)
                                      else bool(data.get("action_guard", False))),
-                    "residual_on": data.get("residual_on")}
+                    "residual_on": data.get("residual_on"),
+                    "neighbour_wind": bool((data.get("env_kwargs") or {}).get("neighbour_wind", False))}
     return {}
 
 
@@ -138,4 +139,5 @@ def load_policy(spec: str, *, action_mode: str | None = None, name: str | None =
             act = guarded(act, meta["action_guard"])  # True: the default gains; a mapping: the sidecar's
         except ValueError as exc:
             raise ValueError(f"policy {spec!r}: its metadata's action_guard: {exc}") from None
-    return EvalPolicy(name or path.stem, mode, act, float(meta.get("control_hz", 10.0) or 10.0), str(path), reset=reset)
+    return EvalPolicy(name or path.stem, mode, act, float(meta.get("control_hz", 10.0) or 10.0), str(path), reset=reset,
+                      neighbour_wind=bool(meta.get("neighbour_wind", False)))

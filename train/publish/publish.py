@@ -48,7 +48,8 @@ def publish(run_dir: str | Path, name: str, *, eval_json: str | Path | None = No
     meta = {
         "env": {**{k: best[k] for k in ("algo", "scenario", "action_mode", "control_hz")},
                 **({"action_guard": best["action_guard"]} if best.get("action_guard") else {}),
-                **({"residual_on": best["residual_on"]} if best.get("residual_on") else {})},
+                **({"residual_on": best["residual_on"]} if best.get("residual_on") else {}),
+                **({"neighbour_wind": True} if best.get("neighbour_wind") else {})},
         "command": cfg.get("command"),
         "seed": c["seed"],
         "num_timesteps": best["num_timesteps"],

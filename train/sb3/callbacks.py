@@ -70,7 +70,7 @@ def build_callbacks(cfg: TrainConfig, run_dir: Path, state: dict, log: Callable[
             short = env.duration_s if env.duration_s is not None and env.duration_s < full else None
             # validated with the leader the run trains with (EnvConfig.leader_reference; None: the scenario's)
             self.config = eval_env_config(cfg.scenario, cfg.action_mode, control_hz=env.control_hz, duration_s=short,
-                                          leader_reference=env.leader_reference)
+                                          leader_reference=env.leader_reference, neighbour_wind=env.neighbour_wind)
             self.seeds = [VALIDATION_SEED_BASE + i for i in range(cfg.eval_episodes)]
             if short is not None:
                 log(f"note: validation episodes cut to {short:g} s like the training's (the test set flies {full:g} s)")
