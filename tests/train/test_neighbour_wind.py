@@ -25,11 +25,12 @@ def test_config_refuses_a_bad_value():
 def test_a_run_with_neighbour_winds_is_flown_with_them(tmp_path, tiny, monkeypatch):
     over = tiny("ppo")
     over["env_kwargs"]["neighbour_wind"] = True
+    over["action_guard"] = True  # the guard in the loop, in validation and in the published policy: told the layout
     out = tmp_path / "r"
     train(scenario="echelon3", algo="ppo", action_mode="setpoints", seed=0, steps=128, out_dir=out, overrides=over,
           progress_bar=False, log=lambda m: None)
     meta = json.loads((out / "best_model.json").read_text())
-    assert meta["neighbour_wind"] is True
+    assert meta["neighbour_wind"] is True and meta["action_guard"] is True
     pub = tmp_path / "pub"
     pub.mkdir()
     monkeypatch.setattr(publish_mod, "POLICIES", pub)
@@ -49,3 +50,56 @@ def test_a_run_with_neighbour_winds_is_flown_with_them(tmp_path, tiny, monkeypat
     assert hid.act(obs).shape == (2, 4)
     with pytest.raises(ValueError, match="observation length 59, expected 65"):
         hid.act(np.ones((2, observation_size(3, 2)), np.float32))
+
+
+def _paired_observations(n_steps=12):
+    """The same echelon3 flight observed without and with the neighbours' winds (sigma 1, followers pushed about)."""
+    import formation_env
+    from formation_env.envs.config import Randomisation
+
+    envs = [formation_env.parallel_env("echelon3", action_mode="setpoints", neighbour_wind=w,
+                                       randomisation=Randomisation(turbulence_sigma_mps=1.0, initial_offset_m=4.0))
+            for w in (False, True)]
+    for env in envs:
+        env.reset(seed=7)
+    rng = np.random.default_rng(3)
+    pairs = []
+    for _ in range(n_steps):
+        act = {a: rng.uniform(-1, 1, 4) for a in envs[0].agents}
+        (o0, *_), (o1, *_) = (env.step(act) for env in envs)
+        pairs.append((np.stack([o0[a] for a in sorted(o0)]), np.stack([o1[a] for a in sorted(o1)])))
+    return pairs
+
+
+def test_the_classical_agents_read_the_longer_observation_when_told():
+    """Told the layout, the guard, the station keeper and the formation PID act on the observation with the
+    neighbours' winds exactly as on the one without; its length alone (65 = 47 + 6 x 3) would read as a third
+    neighbour, so they must be told."""
+    from agents.common import observation_groups
+    from agents.pid_formation import PIDFormation
+    from agents.separation_guard import GuardGains, SeparationGuard
+    from agents.station_keeper import StationKeeper
+
+    pairs = _paired_observations()
+    plain, winds = SeparationGuard(GuardGains(guard_m=30.0)), SeparationGuard(GuardGains(guard_m=30.0),
+                                                                              neighbour_wind=True)
+    keepers = StationKeeper(), StationKeeper(neighbour_wind=True)
+    pids = PIDFormation(), PIDFormation(neighbour_wind=True)
+    for agent in keepers + pids:
+        agent.reset(3)  # the env flies every UAV: three rows
+    rng = np.random.default_rng(0)
+    shifted = 0
+    for o0, o1 in pairs:
+        assert o1.shape[1] == o0.shape[1] + 6
+        a = rng.uniform(-1, 1, (o0.shape[0], 4))
+        g0 = plain.filter(o0, a)
+        np.testing.assert_array_equal(winds.filter(o1, a), g0)
+        shifted += int(np.any(g0 != a))
+        np.testing.assert_array_equal(keepers[1].act(o1), keepers[0].act(o0))
+        np.testing.assert_array_equal(pids[1].act(o1), pids[0].act(o0))
+    assert shifted > 0  # the guard (a wide zone here) acted on some rows: the neighbours were read alike
+    _, wrong = observation_groups(pairs[0][1], "test")
+    assert wrong["neighbours"].shape[1] == 18  # untold: three neighbours, the third made of the winds
+    with pytest.raises(ValueError, match=r"test.act: observation length 59 is not that of an observation with "
+                                         r"neighbours' winds \(47 \+ 9 k, k >= 1\)"):
+        observation_groups(pairs[0][0], "test", neighbour_wind=True)

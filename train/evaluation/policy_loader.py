@@ -126,7 +126,7 @@ def load_policy(spec: str, *, action_mode: str | None = None, name: str | None =
         from ..sb3.residual import residual_policy
 
         try:
-            act, reset = residual_policy(act, meta["residual_on"])
+            act, reset = residual_policy(act, meta["residual_on"], neighbour_wind=bool(meta.get("neighbour_wind", False)))
         except ValueError as exc:
             raise ValueError(f"policy {spec!r}: its metadata's {exc}") from None
     if meta.get("action_guard"):  # trained with the separation guard in the loop: it is part of the policy
@@ -136,7 +136,8 @@ def load_policy(spec: str, *, action_mode: str | None = None, name: str | None =
         from ..sb3.guard import guarded
 
         try:
-            act = guarded(act, meta["action_guard"])  # True: the default gains; a mapping: the sidecar's
+            # True: the default gains; a mapping: the sidecar's (told the observation's layout: the policy's)
+            act = guarded(act, meta["action_guard"], neighbour_wind=bool(meta.get("neighbour_wind", False)))
         except ValueError as exc:
             raise ValueError(f"policy {spec!r}: its metadata's action_guard: {exc}") from None
     return EvalPolicy(name or path.stem, mode, act, float(meta.get("control_hz", 10.0) or 10.0), str(path), reset=reset,

@@ -91,11 +91,11 @@ def build_callbacks(cfg: TrainConfig, run_dir: Path, state: dict, log: Callable[
             if cfg.residual_on is not None:
                 from .residual import residual_policy
 
-                act, reset = residual_policy(act, cfg.residual_on)
+                act, reset = residual_policy(act, cfg.residual_on, neighbour_wind=self.config.neighbour_wind)
             if cfg.action_guard:
                 from .guard import guarded
 
-                act = guarded(act, cfg.action_guard)
+                act = guarded(act, cfg.action_guard, neighbour_wind=self.config.neighbour_wind)
             summ = summarise(run_episodes(FunctionPolicy(act, reset), self.config, self.seeds))
             score = selection_score(summ, cfg.selection_collision_cost)
             entry = {"num_timesteps": int(self.num_timesteps), "score": score, **summ}

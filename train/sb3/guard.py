@@ -28,12 +28,13 @@ def guard_gains(spec):
     return GuardGains(**spec)
 
 
-def guarded(act, gains=None):
+def guarded(act, gains=None, neighbour_wind: bool = False):
     """``act(obs) -> actions`` followed by the separation guard (the evaluation's and the validation's policy);
-    ``gains``: an ``action_guard`` setting (:func:`guard_gains`: None or True for the defaults, or a dict)."""
+    ``gains``: an ``action_guard`` setting (:func:`guard_gains`: None or True for the defaults, or a dict);
+    ``neighbour_wind``: the observations carry the neighbours' winds (the policy's EnvConfig option)."""
     from agents.separation_guard import SeparationGuard
 
-    guard = SeparationGuard(guard_gains(gains))
+    guard = SeparationGuard(guard_gains(gains), neighbour_wind=neighbour_wind)
     return lambda obs: guard.filter(obs, act(obs))
 
 
@@ -42,11 +43,11 @@ class GuardedVecEnv(VecEnvWrapper):
     its observations) whose actions pass through the separation guard, judged on the last observations (after an
     episode's end the next episode's first: the VecEnv resets automatically)."""
 
-    def __init__(self, venv, gains=None) -> None:
+    def __init__(self, venv, gains=None, neighbour_wind: bool = False) -> None:
         from agents.separation_guard import SeparationGuard
 
         super().__init__(venv)
-        self.guard = SeparationGuard(guard_gains(gains))
+        self.guard = SeparationGuard(guard_gains(gains), neighbour_wind=neighbour_wind)
         self._obs: np.ndarray | None = None
 
     def reset(self):

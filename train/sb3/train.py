@@ -110,15 +110,16 @@ def make_train_env(cfg: TrainConfig, seed: int):
 
     from formation_env.envs import FormationVecEnv
 
-    env = FormationVecEnv(cfg.n_formations, make_env_config(cfg), seed=seed)
+    env_config = make_env_config(cfg)
+    env = FormationVecEnv(cfg.n_formations, env_config, seed=seed)
     if cfg.action_guard:  # the separation guard filters the policy's set-points (inside MAPPO's global state)
         from .guard import GuardedVecEnv
 
-        env = GuardedVecEnv(env, cfg.action_guard)
+        env = GuardedVecEnv(env, cfg.action_guard, neighbour_wind=env_config.neighbour_wind)
     if cfg.residual_on is not None:  # the agent's set-points plus the learner's (outside the guard: it filters the sum)
         from .residual import ResidualVecEnv
 
-        env = ResidualVecEnv(env, cfg.residual_on)
+        env = ResidualVecEnv(env, cfg.residual_on, neighbour_wind=env_config.neighbour_wind)
     if cfg.policy == "CentralCriticPolicy":  # MAPPO: every row gets its formation's agent-specific global state
         from .central_critic import GlobalStateVecEnv
 
