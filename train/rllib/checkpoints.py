@@ -25,7 +25,8 @@ def checkpoint_metadata(cfg: RLlibTrainConfig, *, iteration: int, env_steps: int
     env = env_config_for(cfg.scenario, cfg.action_mode, cfg.env_kwargs, learning=cfg.learning)
     return {"backend": "rllib", "algo": "ppo", "scenario": cfg.scenario, "action_mode": cfg.action_mode,
             "learning": cfg.learning, "policies": cfg.policies, "modules": cfg.modules, "control_hz": env.control_hz,
-            "seed": cfg.seed, "iteration": int(iteration), "env_steps": int(env_steps), "ray_version": ray.__version__}
+            "seed": cfg.seed, "iteration": int(iteration), "env_steps": int(env_steps), "ray_version": ray.__version__,
+            "neighbour_wind": bool(env.neighbour_wind)}
 
 
 def latest_rllib_checkpoint(run_dir: str | Path) -> tuple[Path, int] | None:
