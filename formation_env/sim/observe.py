@@ -124,8 +124,21 @@ def observe_formation(x, induced, omega, amb, pd, vd, prev, schedule, cstate, tr
             o[k + m] = signed_log(cstate[a, m], CONTROLLER_STATE_SCALE)
         k += CONTROLLER_STATE_SIZE
         m_n = nv - 1 if neighbour_count <= 0 else neighbour_count
+        kw = k + 6 * m_n  # the neighbour_wind group (with neighbour_wind) follows the neighbours, in their order
         for m in range(m_n):
             j = _neighbour(pd, a, m, neighbour_count)
+            if neighbour_wind:
+                # the gust the neighbour meets against the agent's own: what moves it (and its wake) relative to
+                # the agent; in a frozen field the one ahead meets now what the agent meets a fraction of a second on
+                if j < 0:
+                    o[kw], o[kw + 1], o[kw + 2] = 0.0, 0.0, 0.0
+                else:
+                    dx, dy, dz = amb[j, 0] - amb[a, 0], amb[j, 1] - amb[a, 1], amb[j, 2] - amb[a, 2]
+                    tx, ty = ned_to_track_xy(c, s, dx, dy)
+                    o[kw] = signed_log(tx, WIND_SCALE_MPS)
+                    o[kw + 1] = signed_log(ty, WIND_SCALE_MPS)
+                    o[kw + 2] = signed_log(dz, WIND_SCALE_MPS)
+                kw += 3
             if j < 0:  # fewer UAVs than the policy observes: a far one behind, at the agent's velocity
                 o[k] = signed_log(-ABSENT_NEIGHBOUR_M, NEIGHBOUR_POSITION_SCALE_M)
                 for q in range(1, 6):
@@ -143,20 +156,6 @@ def observe_formation(x, induced, omega, amb, pd, vd, prev, schedule, cstate, tr
             o[k + 4] = signed_log(ty, VELOCITY_SCALE_MPS)
             o[k + 5] = signed_log(dz, VELOCITY_SCALE_MPS)
             k += 6
-        if neighbour_wind:
-            # the gust the neighbour meets against the agent's own: what moves it (and its wake) relative to
-            # the agent; in a frozen field the one ahead meets now what the agent meets a fraction of a second on
-            for m in range(m_n):
-                j = _neighbour(pd, a, m, neighbour_count)
-                if j < 0:
-                    o[k], o[k + 1], o[k + 2] = 0.0, 0.0, 0.0
-                else:
-                    dx, dy, dz = amb[j, 0] - amb[a, 0], amb[j, 1] - amb[a, 1], amb[j, 2] - amb[a, 2]
-                    tx, ty = ned_to_track_xy(c, s, dx, dy)
-                    o[k] = signed_log(tx, WIND_SCALE_MPS)
-                    o[k + 1] = signed_log(ty, WIND_SCALE_MPS)
-                    o[k + 2] = signed_log(dz, WIND_SCALE_MPS)
-                k += 3
         for k in range(o.shape[0]):
             o[k] = _clean(o[k])
 

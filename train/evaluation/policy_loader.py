@@ -24,10 +24,11 @@ CLASSICAL_AGENTS = {"pid_formation": ("agents.pid_formation", "PIDFormation"),
                     "station_keeper": ("agents.station_keeper", "StationKeeper")}
 
 
-def classical_agent(spec: str):
+def classical_agent(spec: str, *, neighbour_wind: bool = False):
     """A fresh instance of the classical agent ``spec`` of ``agents/`` (:data:`CLASSICAL_AGENTS`: ``pid_formation``,
     the formation-keeping controller; ``station_keeper``, the cross-track station keeper), imported only here: a
-    stateful, batched agent (``reset(n_rows)``, ``act(obs)``, ``action_mode``, ``control_hz``)."""
+    stateful, batched agent (``reset(n_rows)``, ``act(obs)``, ``action_mode``, ``control_hz``); ``neighbour_wind``:
+    its observations carry the neighbours' winds (EnvConfig.neighbour_wind), which their length alone does not say."""
     import importlib
 
     module, cls = CLASSICAL_AGENTS[spec]
@@ -37,7 +38,7 @@ def classical_agent(spec: str):
         if exc.name not in (module, "agents"):
             raise
         raise ValueError(f"policy {spec!r} needs {module.replace('.', '/')}.py, which this checkout does not have") from None
-    return agent_class()
+    return agent_class(neighbour_wind=neighbour_wind)
 
 
 def _agent_policy(spec: str) -> EvalPolicy:

@@ -41,8 +41,7 @@ def check_residual_on(spec) -> dict:
 def _agent(spec: dict, neighbour_wind: bool = False):
     from ..evaluation.policy_loader import classical_agent
 
-    agent = classical_agent(spec["agent"])
-    agent.neighbour_wind = bool(neighbour_wind)  # told the observation's layout (its length alone cannot say)
+    agent = classical_agent(spec["agent"], neighbour_wind=neighbour_wind)  # told the observation's layout
     if agent.action_mode != "setpoints":  # pragma: no cover - RESIDUAL_AGENTS lists set-point agents only
         raise ValueError(f"residual_on: {spec['agent']} flies {agent.action_mode!r}, not set-points")
     return agent
