@@ -38,7 +38,8 @@ def classical_agent(spec: str, *, neighbour_wind: bool = False):
         if exc.name not in (module, "agents"):
             raise
         raise ValueError(f"policy {spec!r} needs {module.replace('.', '/')}.py, which this checkout does not have") from None
-    return agent_class(neighbour_wind=neighbour_wind)
+    # the layout flag only where it is set: an agent class flown on plain observations takes no argument
+    return agent_class(neighbour_wind=True) if neighbour_wind else agent_class()
 
 
 def _agent_policy(spec: str) -> EvalPolicy:
