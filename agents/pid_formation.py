@@ -77,7 +77,7 @@ class PIDFormation(RowIntegrators):
 
     def __init__(self, gains: PIDFormationGains | None = None, control_hz: float = 10.0, *,
                  setpoint_low_m=None, setpoint_high_m=None, speed_range_mps: float | None = None,
-                 neighbour_wind: bool = False) -> None:
+                 neighbour_wind: bool = False, neighbour_attitude: bool = False) -> None:
         """``setpoint_low_m`` / ``setpoint_high_m`` (3,) and ``speed_range_mps``: the env's set-point ranges
         (:func:`formation_env.sim.params.setpoint_ranges`; default +-5 m and 2 m/s), so that the offsets
         this controller computes map to the actions that command them (an axis with no range is held)."""
@@ -87,6 +87,7 @@ class PIDFormation(RowIntegrators):
                                 else np.asarray(setpoint_high_m, dtype=float).reshape(3))
         self.speed_range_mps = SETPOINT_SPEED_SCALE_MPS if speed_range_mps is None else float(speed_range_mps)
         self.neighbour_wind = bool(neighbour_wind)  # the observations carry the neighbours' winds (EnvConfig option)
+        self.neighbour_attitude = bool(neighbour_attitude)  # and their attitudes (EnvConfig option)
         if (not np.all(np.isfinite(self.setpoint_low_m)) or not np.all(np.isfinite(self.setpoint_high_m))
                 or np.any(self.setpoint_low_m > 0) or np.any(self.setpoint_high_m < 0)):
             raise ValueError(f"PIDFormation: set-point ranges must be finite with low <= 0 <= high, got "
@@ -123,7 +124,7 @@ class PIDFormation(RowIntegrators):
         return np.clip(act, -1.0, 1.0)
 
     def act(self, obs) -> np.ndarray:
-        obs, groups = observation_groups(obs, "PIDFormation", self.neighbour_wind)
+        obs, groups = observation_groups(obs, "PIDFormation", self.neighbour_wind, self.neighbour_attitude)
         self._rows_for(obs)
         g = self.gains
         dt = 1.0 / self.control_hz

@@ -105,13 +105,15 @@ class SeparationGuard:
     ranges of a scenario without a safe box) with the guard's shift added (and, with ``clip_ramp`` > 0, the lateral
     set-point clipped to the far side of the shift deep in the guard); stateless, so one instance serves every row
     and episode. Rows outside the guard zone pass through unchanged (bit for bit). ``neighbour_wind``: the
-    observations carry the neighbours' winds (EnvConfig.neighbour_wind), which their length alone does not say."""
+    observations carry the neighbours' winds (EnvConfig.neighbour_wind), which their length alone does not say;
+    ``neighbour_attitude``: their attitudes (EnvConfig.neighbour_attitude)."""
 
     action_mode = "setpoints"
 
     def __init__(self, gains: GuardGains | None = None, *, tracker: TrackerGains | None = None,
-                 neighbour_wind: bool = False) -> None:
+                 neighbour_wind: bool = False, neighbour_attitude: bool = False) -> None:
         self.neighbour_wind = bool(neighbour_wind)
+        self.neighbour_attitude = bool(neighbour_attitude)
         self.gains = GuardGains() if gains is None else gains
         if not isinstance(self.gains, GuardGains):
             raise ValueError(f"SeparationGuard: gains must be a GuardGains, got {type(gains).__name__}")
@@ -120,7 +122,7 @@ class SeparationGuard:
             raise ValueError(f"SeparationGuard: the tracker's Kp_alongtrack must be > 0, got {self.kp_alongtrack!r}")
 
     def filter(self, obs, actions) -> np.ndarray:
-        obs, groups = observation_groups(obs, "SeparationGuard", self.neighbour_wind)
+        obs, groups = observation_groups(obs, "SeparationGuard", self.neighbour_wind, self.neighbour_attitude)
         act = np.asarray(actions)
         if act.shape != (obs.shape[0], 4):
             raise ValueError(f"SeparationGuard.filter: actions must have shape ({obs.shape[0]}, 4), got {act.shape}")

@@ -152,8 +152,10 @@ class StationKeeper(RowIntegrators):
 
     def __init__(self, gains: StationKeeperGains | None = None, control_hz: float = 10.0, *,
                  airspeed_mps: float = 25.0, tracker: TrackerGains | None = None,
-                 autopilot: AutopilotGains | None = None, neighbour_wind: bool = False) -> None:
+                 autopilot: AutopilotGains | None = None, neighbour_wind: bool = False,
+                 neighbour_attitude: bool = False) -> None:
         self.neighbour_wind = bool(neighbour_wind)  # the observations carry the neighbours' winds (EnvConfig option)
+        self.neighbour_attitude = bool(neighbour_attitude)  # and their attitudes (EnvConfig option)
         self.gains = StationKeeperGains() if gains is None else gains
         if not isinstance(self.gains, StationKeeperGains):
             raise ValueError(f"StationKeeper: gains must be a StationKeeperGains, got {type(gains).__name__}")
@@ -191,7 +193,7 @@ class StationKeeper(RowIntegrators):
         return self.act(shifted)[:, 1:3] * SETPOINT_POSITION_SCALE_M + off
 
     def act(self, obs) -> np.ndarray:
-        obs, groups = observation_groups(obs, "StationKeeper", self.neighbour_wind)
+        obs, groups = observation_groups(obs, "StationKeeper", self.neighbour_wind, self.neighbour_attitude)
         self._rows_for(obs)
         g, dt = self.gains, 1.0 / self.control_hz
         err = inverse_slog(groups["slot_position_error"], POSITION_SCALE_M)

@@ -27,7 +27,7 @@ MIN_VALIDATION_EPISODES = 32
 # The EnvConfig options a hyperparameter file's ``env_kwargs`` may set (both backends).
 ENV_KEYS = {"control_hz", "wake", "collision_separation_b", "duration_s", "compute_benefit", "reward", "turbulence_field",
             "wake_coupling", "wake_fidelity", "randomisation", "learning", "leader_reference",
-            "neighbour_wind"}
+            "neighbour_wind", "neighbour_attitude"}
 
 
 def load_yaml(path: str | Path) -> dict:

@@ -43,6 +43,11 @@ neighbour_wind (option)     3(V-1)  slog 1 m/s        m/s        with ``EnvConfi
                             or 3k                                neighbour of ``neighbours`` (same order): its
                                                                  ambient wind minus the agent's, slot frame (a
                                                                  missing one: 0)
+neighbour_attitude          3(V-1)  /0.5, /1, /0.5    rad,       with ``EnvConfig(neighbour_attitude=True)`` only
+(option)                    or 3k                     rad/s, rad (after the winds when both are on): each
+                                                                 neighbour of ``neighbours`` (same order): its roll,
+                                                                 roll rate and pitch minus the agent's (a missing
+                                                                 one: 0)
 ==========================  ======  ================  =========  ==================================================
 """
 
@@ -60,7 +65,7 @@ __all__ = ["OBS_CLIP", "GROUPS", "SCHEDULE_SIZE", "CONTROLLER_STATE_SIZE", "obse
 
 GROUPS = ("air_data", "attitude", "rates", "altitude", "slot_position_error", "slot_velocity_error",
           "induced_wind", "induced_rotation", "ambient_wind", "engine", "previous_action", "slot_schedule",
-          "controller_state", "neighbours", "neighbour_wind")
+          "controller_state", "neighbours", "neighbour_wind", "neighbour_attitude")
 SCALES = (ALTITUDE_SCALE_M, CONTROLLER_STATE_SCALE, NEIGHBOUR_POSITION_SCALE_M, OMEGA_REF, POSITION_SCALE_M,
           VELOCITY_SCALE_MPS, WIND_SCALE_MPS)
 
@@ -71,11 +76,11 @@ def slog(x, scale):
 
 
 def to_dict(vector: np.ndarray, n_vehicles: int, neighbour_count: int | None = None,
-            neighbour_wind: bool = False) -> dict[str, np.ndarray]:
-    """Split one agent's flat observation into the named groups (``neighbour_count``, ``neighbour_wind`` as the
-    env's)."""
+            neighbour_wind: bool = False, neighbour_attitude: bool = False) -> dict[str, np.ndarray]:
+    """Split one agent's flat observation into the named groups (``neighbour_count``, ``neighbour_wind``,
+    ``neighbour_attitude`` as the env's)."""
     out, k = {}, 0
-    for name, size in group_sizes(n_vehicles, neighbour_count, neighbour_wind).items():
+    for name, size in group_sizes(n_vehicles, neighbour_count, neighbour_wind, neighbour_attitude).items():
         if size:
             out[name] = vector[..., k:k + size]
         k += size

@@ -105,7 +105,7 @@ class FormationParallelEnv(ParallelEnv):
         self.agents: list[str] = []
         if self.config.obs_mode == "dict":
             self._obs_space = spaces.Dict({k: spaces.Box(-OBS_CLIP, OBS_CLIP, (s,), dtype=np.float32)
-                                           for k, s in group_sizes(n, self.sim.neighbour_count, self.sim.neighbour_wind).items() if s})
+                                           for k, s in group_sizes(n, self.sim.neighbour_count, self.sim.neighbour_wind, self.sim.neighbour_attitude).items() if s})
         else:
             self._obs_space = spaces.Box(-OBS_CLIP, OBS_CLIP, (self.sim.obs_size,), dtype=np.float32)
         self._act_space = spaces.Box(-1.0, 1.0, (4,), dtype=np.float32)
@@ -212,7 +212,7 @@ class FormationParallelEnv(ParallelEnv):
     def _observations(self) -> dict:
         allobs = self.sim.output.observation[0].astype(np.float32)
         n = self.sim.n_vehicles
-        return {a: to_dict(allobs[i], n, self.sim.neighbour_count, self.sim.neighbour_wind) if self.config.obs_mode == "dict" else allobs[i] for a, i in self._index.items()}
+        return {a: to_dict(allobs[i], n, self.sim.neighbour_count, self.sim.neighbour_wind, self.sim.neighbour_attitude) if self.config.obs_mode == "dict" else allobs[i] for a, i in self._index.items()}
 
     def _infos(self) -> dict:
         per_vehicle = self.sim.infos(0)

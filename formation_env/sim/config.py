@@ -332,6 +332,10 @@ class EnvConfig:
         frame (3 values per neighbour; what formation members share over a data link). In a frozen field the UAV
         ahead meets now the air the agent meets a fraction of a second later, and the difference is what moves
         it (and its wake) relative to the agent.
+    neighbour_attitude: False (default) or True: then the ``neighbour_attitude`` group, each observed neighbour's
+        roll / 0.5 rad, roll rate (rad/s) and pitch minus the agent's / 0.5 rad (3 values per neighbour, after the
+        winds when both are on). Its roll sets the height of its wingtip vortices (+-b/2 sin phi), where the
+        agent's saving peaks; no other group carries it.
     """
 
     scenario: object = "formation_keeping"  # a scenario name or a formation_env.scenarios.Scenario
@@ -349,6 +353,7 @@ class EnvConfig:
     wake_fidelity: str | None = None
     neighbour_count: int | None = None
     neighbour_wind: bool = False
+    neighbour_attitude: bool = False
     throttle_max: float = 1.0
     leader_reference: str | None = None
     reward: RewardWeights = field(default_factory=RewardWeights)
@@ -419,6 +424,9 @@ class EnvConfig:
         if not isinstance(self.neighbour_wind, (bool, np.bool_)):
             raise ValueError(f"EnvConfig: neighbour_wind must be True or False, got {self.neighbour_wind!r}")
         object.__setattr__(self, "neighbour_wind", bool(self.neighbour_wind))
+        if not isinstance(self.neighbour_attitude, (bool, np.bool_)):
+            raise ValueError(f"EnvConfig: neighbour_attitude must be True or False, got {self.neighbour_attitude!r}")
+        object.__setattr__(self, "neighbour_attitude", bool(self.neighbour_attitude))
         if not isinstance(self.compute_benefit, (bool, np.bool_)):
             raise ValueError(f"EnvConfig: compute_benefit must be True or False, got {self.compute_benefit!r}")
         object.__setattr__(self, "compute_benefit", bool(self.compute_benefit))

@@ -56,14 +56,16 @@ def signed_log(x, scale):
 
 @_jit
 def observe_formation(x, induced, omega, amb, pd, vd, prev, schedule, cstate, trim_airspeed, altitude, air_params,
-                      vel, chi, out, neighbour_count=0, neighbour_wind=False):
+                      vel, chi, out, neighbour_count=0, neighbour_wind=False, neighbour_attitude=False):
     """Observation rows (V, D) of one formation into ``out``. x (V, 16); induced, amb (V, 3) NED m/s;
     omega (V, 3) body rad/s; pd, vd (V, 3) demands; prev (V, 4); schedule (V, 10); cstate (V, 7);
     vel (V, 3), chi (V,) scratch. ``neighbour_count`` 0: the neighbours group holds every other UAV in
     index order; k > 0: the k UAVs whose demanded positions (slots) are nearest the agent's, nearest first
     (ties by index), and :data:`ABSENT_NEIGHBOUR_M` behind for each of the k that the formation lacks.
     ``neighbour_wind``: then the ``neighbour_wind`` group, each observed neighbour's ambient wind minus the
-    agent's own (the neighbours' order; slot frame; zero for a missing one)."""
+    agent's own (the neighbours' order; slot frame; zero for a missing one). ``neighbour_attitude``: then the
+    ``neighbour_attitude`` group, each observed neighbour's roll / 0.5 rad, roll rate (rad/s) and pitch minus the
+    agent's / 0.5 rad (the neighbours' order; zero for a missing one)."""
     nv = x.shape[0]
     wind = np.zeros(12)
     for a in range(nv):
@@ -125,8 +127,25 @@ def observe_formation(x, induced, omega, amb, pd, vd, prev, schedule, cstate, tr
         k += CONTROLLER_STATE_SIZE
         m_n = nv - 1 if neighbour_count <= 0 else neighbour_count
         kw = k + 6 * m_n  # the neighbour_wind group (with neighbour_wind) follows the neighbours, in their order
+        ka = kw + 3 * m_n if neighbour_wind else kw  # then the neighbour_attitude group (with neighbour_attitude)
         for m in range(m_n):
             j = _neighbour(pd, a, m, neighbour_count)
+            if neighbour_attitude:
+                # where the neighbour's wingtip vortices lie: its roll moves its tips +-b/2 sin(phi) up and down
+                # (3.3 deg RMS for the air-relative leader at sigma 1: 0.08 m, half the followers' vertical error),
+                # which no other group carries (a memoryless policy cannot differentiate the relative velocities)
+                if j < 0:
+                    o[ka], o[ka + 1], o[ka + 2] = 0.0, 0.0, 0.0
+                else:
+                    xj = x[j]
+                    f0, f1, f2, f3 = xj[6], xj[7], xj[8], xj[9]
+                    nj = f0 * f0 + f1 * f1 + f2 * f2 + f3 * f3
+                    phj = math.atan2(2.0 * (f0 * f1 + f2 * f3), f0 * f0 - f1 * f1 - f2 * f2 + f3 * f3)
+                    thj = math.asin(min(1.0, max(-1.0, 2.0 * (f0 * f2 - f1 * f3) / nj)))
+                    o[ka] = phj / 0.5
+                    o[ka + 1] = xj[3]
+                    o[ka + 2] = (thj - theta) / 0.5
+                ka += 3
             if neighbour_wind:
                 # the gust the neighbour meets against the agent's own: what moves it (and its wake) relative to
                 # the agent; in a frozen field the one ahead meets now what the agent meets a fraction of a second on
@@ -267,9 +286,11 @@ def reward_formation(w, error, previous_error, action, previous_action, saving, 
         out[a, 9] = -w.hold if (w.hold > 0.0 and in_hold and not err < w.hold_radius_m) else 0.0
 
 
-def group_sizes(n_vehicles: int, neighbour_count: int | None = None, neighbour_wind: bool = False) -> dict[str, int]:
+def group_sizes(n_vehicles: int, neighbour_count: int | None = None, neighbour_wind: bool = False,
+                neighbour_attitude: bool = False) -> dict[str, int]:
     """Size of each observation group (formation_env.envs.observations documents them), for V UAVs
-    (``neighbour_count`` k: k neighbours observed, whatever V; ``neighbour_wind``: their ambient winds too)."""
+    (``neighbour_count`` k: k neighbours observed, whatever V; ``neighbour_wind``: their ambient winds too;
+    ``neighbour_attitude``: their roll, roll rate and relative pitch too)."""
     n = n_vehicles - 1 if not neighbour_count else int(neighbour_count)
     sizes = {"air_data": 3, "attitude": 3, "rates": 3, "altitude": 1, "slot_position_error": 3,
              "slot_velocity_error": 3, "induced_wind": 3, "induced_rotation": 3, "ambient_wind": 3, "engine": 1,
@@ -277,11 +298,14 @@ def group_sizes(n_vehicles: int, neighbour_count: int | None = None, neighbour_w
              "neighbours": 6 * n}
     if neighbour_wind:
         sizes["neighbour_wind"] = 3 * n
+    if neighbour_attitude:
+        sizes["neighbour_attitude"] = 3 * n
     return sizes
 
 
-def observation_size(n_vehicles: int, neighbour_count: int | None = None, neighbour_wind: bool = False) -> int:
+def observation_size(n_vehicles: int, neighbour_count: int | None = None, neighbour_wind: bool = False,
+                     neighbour_attitude: bool = False) -> int:
     """Length D of one UAV's flat observation vector in a formation of V UAVs (with ``neighbour_count`` k:
-    the same as in a formation of k + 1 UAVs observing all, whatever V; ``neighbour_wind`` adds 3 per
-    observed neighbour)."""
-    return sum(group_sizes(n_vehicles, neighbour_count, neighbour_wind).values())
+    the same as in a formation of k + 1 UAVs observing all, whatever V; ``neighbour_wind`` and
+    ``neighbour_attitude`` add 3 per observed neighbour each)."""
+    return sum(group_sizes(n_vehicles, neighbour_count, neighbour_wind, neighbour_attitude).values())

@@ -199,6 +199,7 @@ class StepParams(NamedTuple):
     coupling: CouplingArrays  # how the wake reaches the 6-DOF (formation_env.wake.coupling)
     neighbour_count: int = 0  # observed neighbours: 0 every other UAV in index order; k the k nearest by slot
     neighbour_wind: bool = False  # the observed neighbours' ambient winds in the observation too
+    neighbour_attitude: bool = False  # and their roll, roll rate and relative pitch
 
 
 def surface_scale(limit_rad: float) -> np.ndarray:

@@ -117,6 +117,7 @@ class Simulation:
         # the neighbours each agent observes (0: every other UAV; k: the k nearest by slot)
         self.neighbour_count = sc.neighbour_count if config.neighbour_count is None else config.neighbour_count
         self.neighbour_wind = bool(config.neighbour_wind)  # their ambient winds observed too
+        self.neighbour_attitude = bool(config.neighbour_attitude)  # and their attitude
         self.trim = trim(sc.airspeed_mps, sc.altitude_m)
         fc = PIDFlightControl.from_trim(self.trim, dt=sc.dt, throttle_limits=(0.0, config.throttle_max)).config
         self.surface_limit_rad = float(fc.surface_limit_rad)
@@ -157,10 +158,10 @@ class Simulation:
             fcs=fcs_params(fc, sc.dt), action=self._action_params(config), reward=self._reward_params(config),
             field=turbulence_params(sc, sigma, config.turbulence_field), trim_airspeed_mps=float(sc.airspeed_mps),
             coupling=coupling_arrays(lattice, self.wake_coupling, AEROSONDE), neighbour_count=self.neighbour_count,
-            neighbour_wind=self.neighbour_wind)
+            neighbour_wind=self.neighbour_wind, neighbour_attitude=self.neighbour_attitude)
         self.state = init_state(self.batch_size, v, lattice.n_panels, self.params.field)
-        self.output: StepOutput = init_output(self.batch_size, v, observation_size(v, self.neighbour_count, self.neighbour_wind))
-        self.obs_size = observation_size(v, self.neighbour_count, self.neighbour_wind)
+        self.obs_size = observation_size(v, self.neighbour_count, self.neighbour_wind, self.neighbour_attitude)
+        self.output: StepOutput = init_output(self.batch_size, v, self.obs_size)
         self.info = InfoArrays(self)
         self._actions = np.zeros((self.batch_size, v, 4))
         self._reset_once = np.zeros(self.batch_size, dtype=bool)

@@ -34,11 +34,13 @@ def _to_track(vec, chi):
 
 def build_observations_reference(state, induced_ned, omega_body, ambient_ned, turbulence_body, position_demand,
                                  velocity_demand, previous_action, schedule, controller_state, trim_airspeed,
-                                 scenario_altitude, neighbour_count: int = 0, neighbour_wind: bool = False) -> np.ndarray:
+                                 scenario_altitude, neighbour_count: int = 0, neighbour_wind: bool = False,
+                                 neighbour_attitude: bool = False) -> np.ndarray:
     """The same observations in plain numpy (the readable definition; tests hold the compiled one to it).
     ``neighbour_count`` k > 0: the k others whose demanded positions are nearest the agent's (a stable sort:
     ties by index), a missing one 1 km behind at the agent's velocity. ``neighbour_wind``: then each of those
-    neighbours' ambient wind minus the agent's, slot frame (a missing one: 0)."""
+    neighbours' ambient wind minus the agent's, slot frame (a missing one: 0). ``neighbour_attitude``: then each of
+    those neighbours' roll / 0.5, roll rate (rad/s) and pitch minus the agent's / 0.5 (a missing one: 0)."""
     b, v = state.shape[:2]
     flat = state.reshape(b * v, N_STATES)
     with np.errstate(all="ignore"):
@@ -70,6 +72,7 @@ def build_observations_reference(state, induced_ned, omega_body, ambient_ned, tu
         if k > 0:
             neigh = np.empty((b, v, 6 * k))
             nwind = np.zeros((b, v, 3 * k))
+            natt = np.zeros((b, v, 3 * k))
             for f in range(b):
                 for i in range(v):
                     others = [j for j in range(v) if j != i]
@@ -84,9 +87,14 @@ def build_observations_reference(state, induced_ned, omega_body, ambient_ned, tu
                     neigh[f, i] = np.concatenate([rows, absent]).reshape(-1)
                     rel_w = slog(_to_track(ambient_total[f, others] - ambient_total[f, i], chi[f, i]), WIND_SCALE_MPS)
                     nwind[f, i, :3 * len(others)] = rel_w.reshape(-1)
+                    att = np.stack([euler[f, others, 0] / 0.5, state[f, others, 3],
+                                    (euler[f, others, 1] - euler[f, i, 1]) / 0.5], -1)
+                    natt[f, i, :3 * len(others)] = att.reshape(-1)
             parts.append(neigh)
             if neighbour_wind:
                 parts.append(nwind)
+            if neighbour_attitude:
+                parts.append(natt)
         obs = np.concatenate(parts, axis=-1)
     obs = np.nan_to_num(obs, nan=0.0, posinf=OBS_CLIP, neginf=-OBS_CLIP)
     return np.clip(obs, -OBS_CLIP, OBS_CLIP)

@@ -85,14 +85,17 @@ def test_every_formation_observes_one_size_and_the_nearest_slots():
     assert _neighbour(pd, 1, 4, 5) == -1  # more asked than the formation has
 
 
-@pytest.mark.parametrize("k,wind", [(0, False), (2, False), (6, False), (0, True), (2, True), (6, True)])
-def test_compiled_neighbours_equal_the_numpy_definition(k, wind):
+@pytest.mark.parametrize("k,wind,att", [(0, False, False), (2, False, False), (6, False, False), (0, True, False),
+                                        (2, True, False), (6, True, False), (0, False, True), (2, True, True),
+                                        (6, False, True)])
+def test_compiled_neighbours_equal_the_numpy_definition(k, wind, att):
     """The compiled observation with ``neighbour_count`` k equals the numpy definition (tests/oracles), along a
     randomised vee episode: every other UAV (0), the nearest two by slot, and more than the vee has (6: two
-    absent, 1 km behind); with and without the neighbours' winds."""
+    absent, 1 km behind); with and without the neighbours' winds and attitudes."""
     from tests.oracles.env_step import build_observations_reference, slot_schedule_features
 
     env = formation_env.parallel_env("vee5", action_mode="setpoints", neighbour_count=k, neighbour_wind=wind,
+                                     neighbour_attitude=att,
                                      randomisation=Randomisation(initial_offset_m=3.0, turbulence_sigma_mps=1.0))
     env.reset(seed=11)
     rng = np.random.default_rng(2)
@@ -103,8 +106,8 @@ def test_compiled_neighbours_equal_the_numpy_definition(k, wind):
         ref = build_observations_reference(e.aircraft, e.induced, e.omega, e.ambient_wind(), np.zeros_like(e.induced),
                                            e.position_demand, e.velocity_demand, e.state.previous_action, sched,
                                            e.state.controller, e.scenario.airspeed_mps, e.scenario.altitude_m,
-                                           neighbour_count=k, neighbour_wind=wind)
-        assert ref.shape[-1] == observation_size(5, k, wind) == env.observation_space("uav_1").shape[0]
+                                           neighbour_count=k, neighbour_wind=wind, neighbour_attitude=att)
+        assert ref.shape[-1] == observation_size(5, k, wind, att) == env.observation_space("uav_1").shape[0]
         np.testing.assert_allclose(e.output.observation, ref, rtol=0, atol=1e-12)
 
 
@@ -136,6 +139,40 @@ def test_neighbour_wind_is_the_gust_difference_and_changes_nothing_else():
             assert spread == 0.0
 
 
+def test_neighbour_attitude_is_the_neighbours_attitude_and_changes_nothing_else():
+    """With ``neighbour_attitude`` the observation is the one without it plus each neighbour's roll / 0.5, roll rate
+    and pitch minus the agent's / 0.5 (read back from the aircraft states), and the flight is the same bit for bit;
+    with the winds too, the attitudes follow the winds."""
+    from formation_env.aircraft.state import euler_angles
+    from formation_env.envs.observations import to_dict
+
+    cfgs = [(False, False), (False, True), (True, True)]
+    envs = [formation_env.parallel_env("echelon3", action_mode="setpoints", neighbour_wind=w, neighbour_attitude=t,
+                                       randomisation=Randomisation(turbulence_sigma_mps=1.0)) for w, t in cfgs]
+    for env in envs:
+        env.reset(seed=5)
+    size = observation_size(3, 2)
+    assert [e.observation_space("uav_1").shape[0] for e in envs] == [size, size + 6, size + 12]
+    rng = np.random.default_rng(0)
+    for _ in range(20):
+        act = {a: rng.uniform(-1, 1, 4) for a in envs[0].agents}
+        (o0, *_), (o1, *_), (o2, *_) = (env.step(act) for env in envs)
+        np.testing.assert_array_equal(envs[1].sim.aircraft, envs[0].sim.aircraft)
+        eul = euler_angles(envs[0].sim.aircraft[0])  # (V, 3)
+        x = envs[0].sim.aircraft[0]
+        for i, a in enumerate(o0):
+            np.testing.assert_array_equal(o1[a][:size], o0[a])
+            np.testing.assert_array_equal(o2[a][:size + 6], np.concatenate([o0[a], to_dict(o2[a], 3, 2, True, True)["neighbour_wind"]]))
+            d = to_dict(o1[a], 3, 2, False, True)["neighbour_attitude"].reshape(2, 3)
+            np.testing.assert_array_equal(d, to_dict(o2[a], 3, 2, True, True)["neighbour_attitude"].reshape(2, 3))
+            # the two neighbours of each UAV of an echelon of 3 observing 2: the other two, nearest slot first
+            for row, j in zip(d, sorted((j for j in range(3) if j != i),
+                                        key=lambda j: (np.sum((envs[0].sim.position_demand[0, j]
+                                                               - envs[0].sim.position_demand[0, i]) ** 2), j))):
+                np.testing.assert_allclose(row, [eul[j, 0] / 0.5, x[j, 3], (eul[j, 1] - eul[i, 1]) / 0.5],
+                                           rtol=1e-6, atol=1e-7)  # the env's observations are float32
+
+
 def test_neighbour_count_is_checked():
     with pytest.raises(ValueError, match="neighbour_count"):
         EnvConfig(scenario="vee5", neighbour_count=-1)
@@ -143,6 +180,8 @@ def test_neighbour_count_is_checked():
         EnvConfig(scenario="vee5", neighbour_count=True)
     with pytest.raises(ValueError, match="neighbour_wind must be True or False, got 1"):
         EnvConfig(scenario="vee5", neighbour_wind=1)
+    with pytest.raises(ValueError, match="neighbour_attitude must be True or False, got 'yes'"):
+        EnvConfig(scenario="vee5", neighbour_attitude="yes")
 
 
 def test_the_tasks_are_registered_with_their_reference():

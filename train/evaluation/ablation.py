@@ -38,11 +38,12 @@ def ablation_name(policy_name: str, groups: Sequence[str]) -> str:
 
 
 def ablated(policy: EvalPolicy, groups: Sequence[str], n_vehicles: int, neighbour_count: int | None = None,
-            neighbour_wind: bool = False) -> EvalPolicy:
+            neighbour_wind: bool = False, neighbour_attitude: bool = False) -> EvalPolicy:
     """A copy of ``policy`` whose observation has ``groups`` zeroed (formation of ``n_vehicles`` UAVs observing
-    ``neighbour_count`` neighbours, and their winds with ``neighbour_wind``, as the env's options)."""
+    ``neighbour_count`` neighbours, and their winds with ``neighbour_wind`` and attitudes with ``neighbour_attitude``,
+    as the env's options)."""
     groups = parse_ablation(groups)
-    sizes = group_sizes(n_vehicles, neighbour_count, neighbour_wind)
+    sizes = group_sizes(n_vehicles, neighbour_count, neighbour_wind, neighbour_attitude)
     mask, k = [], 0
     for name, size in sizes.items():
         if name in groups:
@@ -63,4 +64,4 @@ def ablated(policy: EvalPolicy, groups: Sequence[str], n_vehicles: int, neighbou
 
     return EvalPolicy(name=ablation_name(policy.name, groups), action_mode=policy.action_mode, act=masked,
                       control_hz=policy.control_hz, path=policy.path, reset=policy.reset,
-                      neighbour_wind=policy.neighbour_wind)
+                      neighbour_wind=policy.neighbour_wind, neighbour_attitude=policy.neighbour_attitude)

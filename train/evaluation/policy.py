@@ -27,3 +27,5 @@ class EvalPolicy:
     before the first decision (stateful policies: a PID's integrators)."""
     neighbour_wind: bool = False
     """Trained observing its neighbours' winds (EnvConfig.neighbour_wind): flown with that observation."""
+    neighbour_attitude: bool = False
+    """Trained observing its neighbours' attitudes (EnvConfig.neighbour_attitude): flown with that observation."""

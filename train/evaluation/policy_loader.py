@@ -24,11 +24,12 @@ CLASSICAL_AGENTS = {"pid_formation": ("agents.pid_formation", "PIDFormation"),
                     "station_keeper": ("agents.station_keeper", "StationKeeper")}
 
 
-def classical_agent(spec: str, *, neighbour_wind: bool = False):
+def classical_agent(spec: str, *, neighbour_wind: bool = False, neighbour_attitude: bool = False):
     """A fresh instance of the classical agent ``spec`` of ``agents/`` (:data:`CLASSICAL_AGENTS`: ``pid_formation``,
     the formation-keeping controller; ``station_keeper``, the cross-track station keeper), imported only here: a
     stateful, batched agent (``reset(n_rows)``, ``act(obs)``, ``action_mode``, ``control_hz``); ``neighbour_wind``:
-    its observations carry the neighbours' winds (EnvConfig.neighbour_wind), which their length alone does not say."""
+    its observations carry the neighbours' winds (EnvConfig.neighbour_wind), which their length alone does not say;
+    ``neighbour_attitude`` their attitudes."""
     import importlib
 
     module, cls = CLASSICAL_AGENTS[spec]
@@ -39,7 +40,8 @@ def classical_agent(spec: str, *, neighbour_wind: bool = False):
             raise
         raise ValueError(f"policy {spec!r} needs {module.replace('.', '/')}.py, which this checkout does not have") from None
     # the layout flag only where it is set: an agent class flown on plain observations takes no argument
-    return agent_class(neighbour_wind=True) if neighbour_wind else agent_class()
+    flags = {k: True for k, on in (("neighbour_wind", neighbour_wind), ("neighbour_attitude", neighbour_attitude)) if on}
+    return agent_class(**flags)
 
 
 def _agent_policy(spec: str) -> EvalPolicy:
@@ -66,7 +68,8 @@ def policy_metadata(path: Path) -> dict:
                     "action_guard": (data.get("action_guard") if isinstance(data.get("action_guard"), dict)
                                      else bool(data.get("action_guard", False))),
                     "residual_on": data.get("residual_on"),
-                    "neighbour_wind": bool((data.get("env_kwargs") or {}).get("neighbour_wind", False))}
+                    "neighbour_wind": bool((data.get("env_kwargs") or {}).get("neighbour_wind", False)),
+                    "neighbour_attitude": bool((data.get("env_kwargs") or {}).get("neighbour_attitude", False))}
     return {}
 
 
@@ -128,7 +131,8 @@ def load_policy(spec: str, *, action_mode: str | None = None, name: str | None =
         from ..sb3.residual import residual_policy
 
         try:
-            act, reset = residual_policy(act, meta["residual_on"], neighbour_wind=bool(meta.get("neighbour_wind", False)))
+            act, reset = residual_policy(act, meta["residual_on"], neighbour_wind=bool(meta.get("neighbour_wind", False)),
+                                         neighbour_attitude=bool(meta.get("neighbour_attitude", False)))
         except ValueError as exc:
             raise ValueError(f"policy {spec!r}: its metadata's {exc}") from None
     if meta.get("action_guard"):  # trained with the separation guard in the loop: it is part of the policy
@@ -139,8 +143,10 @@ def load_policy(spec: str, *, action_mode: str | None = None, name: str | None =
 
         try:
             # True: the default gains; a mapping: the sidecar's (told the observation's layout: the policy's)
-            act = guarded(act, meta["action_guard"], neighbour_wind=bool(meta.get("neighbour_wind", False)))
+            act = guarded(act, meta["action_guard"], neighbour_wind=bool(meta.get("neighbour_wind", False)),
+                          neighbour_attitude=bool(meta.get("neighbour_attitude", False)))
         except ValueError as exc:
             raise ValueError(f"policy {spec!r}: its metadata's action_guard: {exc}") from None
     return EvalPolicy(name or path.stem, mode, act, float(meta.get("control_hz", 10.0) or 10.0), str(path), reset=reset,
-                      neighbour_wind=bool(meta.get("neighbour_wind", False)))
+                      neighbour_wind=bool(meta.get("neighbour_wind", False)),
+                      neighbour_attitude=bool(meta.get("neighbour_attitude", False)))

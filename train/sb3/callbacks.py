@@ -70,7 +70,8 @@ def build_callbacks(cfg: TrainConfig, run_dir: Path, state: dict, log: Callable[
             short = env.duration_s if env.duration_s is not None and env.duration_s < full else None
             # validated with the leader the run trains with (EnvConfig.leader_reference; None: the scenario's)
             self.config = eval_env_config(cfg.scenario, cfg.action_mode, control_hz=env.control_hz, duration_s=short,
-                                          leader_reference=env.leader_reference, neighbour_wind=env.neighbour_wind)
+                                          leader_reference=env.leader_reference, neighbour_wind=env.neighbour_wind,
+                                          neighbour_attitude=env.neighbour_attitude)
             self.seeds = [VALIDATION_SEED_BASE + i for i in range(cfg.eval_episodes)]
             if short is not None:
                 log(f"note: validation episodes cut to {short:g} s like the training's (the test set flies {full:g} s)")
@@ -91,11 +92,13 @@ def build_callbacks(cfg: TrainConfig, run_dir: Path, state: dict, log: Callable[
             if cfg.residual_on is not None:
                 from .residual import residual_policy
 
-                act, reset = residual_policy(act, cfg.residual_on, neighbour_wind=self.config.neighbour_wind)
+                act, reset = residual_policy(act, cfg.residual_on, neighbour_wind=self.config.neighbour_wind,
+                                             neighbour_attitude=self.config.neighbour_attitude)
             if cfg.action_guard:
                 from .guard import guarded
 
-                act = guarded(act, cfg.action_guard, neighbour_wind=self.config.neighbour_wind)
+                act = guarded(act, cfg.action_guard, neighbour_wind=self.config.neighbour_wind,
+                              neighbour_attitude=self.config.neighbour_attitude)
             summ = summarise(run_episodes(FunctionPolicy(act, reset), self.config, self.seeds))
             score = selection_score(summ, cfg.selection_collision_cost)
             entry = {"num_timesteps": int(self.num_timesteps), "score": score, **summ}

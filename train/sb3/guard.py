@@ -28,13 +28,14 @@ def guard_gains(spec):
     return GuardGains(**spec)
 
 
-def guarded(act, gains=None, neighbour_wind: bool = False):
+def guarded(act, gains=None, neighbour_wind: bool = False, neighbour_attitude: bool = False):
     """``act(obs) -> actions`` followed by the separation guard (the evaluation's and the validation's policy);
     ``gains``: an ``action_guard`` setting (:func:`guard_gains`: None or True for the defaults, or a dict);
-    ``neighbour_wind``: the observations carry the neighbours' winds (the policy's EnvConfig option)."""
+    ``neighbour_wind``, ``neighbour_attitude``: the observations carry the neighbours' winds, attitudes (the policy's
+    EnvConfig options)."""
     from agents.separation_guard import SeparationGuard
 
-    guard = SeparationGuard(guard_gains(gains), neighbour_wind=neighbour_wind)
+    guard = SeparationGuard(guard_gains(gains), neighbour_wind=neighbour_wind, neighbour_attitude=neighbour_attitude)
     return lambda obs: guard.filter(obs, act(obs))
 
 
@@ -43,11 +44,12 @@ class GuardedVecEnv(VecEnvWrapper):
     its observations) whose actions pass through the separation guard, judged on the last observations (after an
     episode's end the next episode's first: the VecEnv resets automatically)."""
 
-    def __init__(self, venv, gains=None, neighbour_wind: bool = False) -> None:
+    def __init__(self, venv, gains=None, neighbour_wind: bool = False, neighbour_attitude: bool = False) -> None:
         from agents.separation_guard import SeparationGuard
 
         super().__init__(venv)
-        self.guard = SeparationGuard(guard_gains(gains), neighbour_wind=neighbour_wind)
+        self.guard = SeparationGuard(guard_gains(gains), neighbour_wind=neighbour_wind,
+                                     neighbour_attitude=neighbour_attitude)
         self._obs: np.ndarray | None = None
 
     def reset(self):

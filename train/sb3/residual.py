@@ -38,10 +38,11 @@ def check_residual_on(spec) -> dict:
     return {"agent": agent, "scale": float(scale)}
 
 
-def _agent(spec: dict, neighbour_wind: bool = False):
+def _agent(spec: dict, neighbour_wind: bool = False, neighbour_attitude: bool = False):
     from ..evaluation.policy_loader import classical_agent
 
-    agent = classical_agent(spec["agent"], neighbour_wind=neighbour_wind)  # told the observation's layout
+    # told the observation's layout
+    agent = classical_agent(spec["agent"], neighbour_wind=neighbour_wind, neighbour_attitude=neighbour_attitude)
     if agent.action_mode != "setpoints":  # pragma: no cover - RESIDUAL_AGENTS lists set-point agents only
         raise ValueError(f"residual_on: {spec['agent']} flies {agent.action_mode!r}, not set-points")
     return agent
@@ -51,12 +52,12 @@ def _combine(base: np.ndarray, a: np.ndarray, scale: float) -> np.ndarray:
     return np.clip(np.asarray(base, dtype=float) + scale * np.asarray(a, dtype=float), -1.0, 1.0)
 
 
-def residual_policy(act, spec, neighbour_wind: bool = False):
+def residual_policy(act, spec, neighbour_wind: bool = False, neighbour_attitude: bool = False):
     """``(act', reset)``: the evaluation's and the validation's policy of a residual learner ``act(obs) -> a``;
     ``reset(n_rows)`` restarts the agent's integrators (every batch of episodes); ``neighbour_wind``: the
-    observations carry the neighbours' winds (the policy's EnvConfig option)."""
+    observations carry the neighbours' winds (the policy's EnvConfig option); ``neighbour_attitude`` their attitudes."""
     spec = check_residual_on(spec)
-    agent = _agent(spec, neighbour_wind)
+    agent = _agent(spec, neighbour_wind, neighbour_attitude)
 
     def combined(obs):
         return _combine(agent.act(obs), act(obs), spec["scale"])
@@ -69,10 +70,10 @@ class ResidualVecEnv(VecEnvWrapper):
     the agent acting on the last observations (after an episode's end, the next episode's first: the VecEnv resets
     automatically, and the agent's rows restart with it)."""
 
-    def __init__(self, venv, spec, neighbour_wind: bool = False) -> None:
+    def __init__(self, venv, spec, neighbour_wind: bool = False, neighbour_attitude: bool = False) -> None:
         super().__init__(venv)
         self.spec = check_residual_on(spec)
-        self.agent = _agent(self.spec, neighbour_wind)
+        self.agent = _agent(self.spec, neighbour_wind, neighbour_attitude)
         self._obs: np.ndarray | None = None
 
     def reset(self):

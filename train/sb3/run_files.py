@@ -57,6 +57,8 @@ def run_metadata(cfg: TrainConfig, steps: int, extra: dict | None = None) -> dic
         d["action_guard"] = cfg.action_guard  # True, or the guard's gains
     if env.neighbour_wind:
         d["neighbour_wind"] = True  # an observation option the policy must be flown with
+    if env.neighbour_attitude:
+        d["neighbour_attitude"] = True  # the same
     if cfg.residual_on is not None:
         d["residual_on"] = cfg.residual_on  # the agent the learner's actions are added to, and their scale
     if extra:

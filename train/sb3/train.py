@@ -115,11 +115,13 @@ def make_train_env(cfg: TrainConfig, seed: int):
     if cfg.action_guard:  # the separation guard filters the policy's set-points (inside MAPPO's global state)
         from .guard import GuardedVecEnv
 
-        env = GuardedVecEnv(env, cfg.action_guard, neighbour_wind=env_config.neighbour_wind)
+        env = GuardedVecEnv(env, cfg.action_guard, neighbour_wind=env_config.neighbour_wind,
+                            neighbour_attitude=env_config.neighbour_attitude)
     if cfg.residual_on is not None:  # the agent's set-points plus the learner's (outside the guard: it filters the sum)
         from .residual import ResidualVecEnv
 
-        env = ResidualVecEnv(env, cfg.residual_on, neighbour_wind=env_config.neighbour_wind)
+        env = ResidualVecEnv(env, cfg.residual_on, neighbour_wind=env_config.neighbour_wind,
+                             neighbour_attitude=env_config.neighbour_attitude)
     if cfg.policy == "CentralCriticPolicy":  # MAPPO: every row gets its formation's agent-specific global state
         from .central_critic import GlobalStateVecEnv
 
