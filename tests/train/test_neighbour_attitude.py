@@ -1,50 +1,8 @@
-"""The neighbours' attitude as an observation option (EnvConfig.neighbour_attitude) through training, publication and
-evaluation, and the classical agents told the layout (as the neighbours' winds, tests/train/test_neighbour_wind.py)."""
-
-import json
+"""The classical agents told the layout of the neighbours' attitudes (EnvConfig.neighbour_attitude); the option through
+training, publication and evaluation is tested with the winds' in tests/train/test_neighbour_wind.py."""
 
 import numpy as np
 import pytest
-
-from formation_env.envs.observations import observation_size
-from train.evaluation.ablation import ablated
-from train.evaluation.evaluate import evaluate
-from train.evaluation.policy_loader import load_policy
-from train.publish import publish as publish_mod
-from train.sb3.config import TrainConfig
-from train.sb3.train import train
-
-
-def test_config_refuses_a_bad_value():
-    with pytest.raises(ValueError, match=r"neighbour_attitude must be True or False, got 'yes'"):
-        TrainConfig(scenario="echelon3", algo="ppo", action_mode="setpoints", seed=0, n_timesteps=10,
-                    env_kwargs={"neighbour_attitude": "yes"})
-
-
-def test_a_run_with_neighbour_attitudes_is_flown_with_them(tmp_path, tiny, monkeypatch):
-    over = tiny("ppo")
-    over["env_kwargs"]["neighbour_attitude"] = True
-    over["action_guard"] = True  # the guard in the loop, in validation and in the published policy: told the layout
-    out = tmp_path / "r"
-    train(scenario="echelon3", algo="ppo", action_mode="setpoints", seed=0, steps=128, out_dir=out, overrides=over,
-          progress_bar=False, log=lambda m: None)
-    meta = json.loads((out / "best_model.json").read_text())
-    assert meta["neighbour_attitude"] is True and meta["action_guard"] is True and "neighbour_wind" not in meta
-    pub = tmp_path / "pub"
-    pub.mkdir()
-    monkeypatch.setattr(publish_mod, "POLICIES", pub)
-    publish_mod.publish(out, "p")
-    side = json.loads((pub / "p.json").read_text())
-    assert side["env"]["neighbour_attitude"] is True
-    pol = load_policy(str(pub / "p.zip"))
-    assert pol.neighbour_attitude and not pol.neighbour_wind
-    res = evaluate([str(pub / "p.zip")], scenario="echelon3", episodes=1, duration_s=2.0, plots=False, n_boot=10,
-                   ablations=["neighbour_attitude"])
-    assert set(res["policies"]) == {"p", "p-without-neighbour_attitude"}
-    hid = ablated(pol, ["neighbour_attitude"], 3, 2, False, True)
-    assert hid.act(np.ones((2, observation_size(3, 2, False, True)), np.float32)).shape == (2, 4)
-    with pytest.raises(ValueError, match="observation length 59, expected 65"):
-        hid.act(np.ones((2, observation_size(3, 2)), np.float32))
 
 
 def test_the_classical_agents_read_the_attitudes_when_told():
