@@ -23,10 +23,10 @@ from pathlib import Path
 __all__ = ["PACKAGE_DIR", "FRONT_ENDS", "source_fingerprint", "cache_dirs", "check_kernel_cache"]
 
 PACKAGE_DIR = Path(__file__).resolve().parent
-# front ends with no compiled code, which no kernel can import (the layering: formation_env's lower layers never
-# import them; tests/sim/test_kernel_cache.py checks they mention no numba): editing a CLI help string does not
-# recompile the kernels
-FRONT_ENDS = ("cli", "plotting", "report", "replay")
+# layers with no compiled code, which no kernel can import (the layering: the physics and the engine never import
+# them; tests/sim/test_kernel_cache.py checks they mention no numba and that no compiled layer imports them): editing
+# a CLI help string, an env adapter or a task's Python file does not recompile the kernels
+FRONT_ENDS = ("cli", "plotting", "report", "replay", "envs", "tasks")
 _STAMP_NAME = "formation_env_kernel_sources.sha256"
 _CACHE_SUFFIXES = (".nbi", ".nbc")
 

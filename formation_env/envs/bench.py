@@ -2,7 +2,7 @@
 and with a PID-flown leader, and the SB3 vector env over batch sizes, with 1 and 2 threads, with
 and without a competing busy process, optionally against an older checkout measured in the same
 session (``--baseline PATH``: ratios new / old). Each configuration runs in its own subprocess
-(:mod:`formation_env.envs.bench_cases`), so thread settings and the numba caches of the two
+(:mod:`formation_env.envs.bench_cases`), so thread settings and the compiled-kernel caches of the two
 checkouts never mix. No assertions: speed is reported, not tested.
 """
 

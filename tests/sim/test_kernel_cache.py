@@ -50,6 +50,17 @@ def test_front_ends_do_not_invalidate_and_hold_no_compiled_code(tmp_path):
         for f in (kc.PACKAGE_DIR / name).rglob("*.py"):
             text = f.read_text(encoding="utf-8")
             assert "numba" not in text and "njit" not in text, f
+    # ... and while no compiled layer imports one (a kernel's module could then depend on a front end's source)
+    import re
+
+    fronts = "|".join(kc.FRONT_ENDS)
+    pattern = re.compile(rf"^\s*(from|import)\s+(formation_env\.|\.\.?)({fronts})\b", re.M)
+    compiled = {f.relative_to(kc.PACKAGE_DIR).parts[0] for f in kc._sources(kc.PACKAGE_DIR)
+                if "njit" in f.read_text(encoding="utf-8")}
+    assert {"sim", "wake", "aircraft", "atmosphere"} <= compiled
+    for f in kc._sources(kc.PACKAGE_DIR):
+        if f.relative_to(kc.PACKAGE_DIR).parts[0] in compiled | {"scenarios", "geometry", "constants.py"}:
+            assert not pattern.search(f.read_text(encoding="utf-8")), f
 
 
 def test_a_user_cache_dir_is_checked_where_numba_puts_it(tmp_path):
