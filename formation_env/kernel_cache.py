@@ -5,8 +5,10 @@ bytes; earlier: its modification time). A compiled function that calls, or inlin
 ``decide_one`` (sim/step.py) inlines the stages of sim/stages.py and calls the ELL of wake/*.py -- is *not*
 recompiled when only that other file changes: the cached caller silently runs the old physics (measured: an edit
 of sim/stages.py left the cached decision step running the previous code). So the package keeps one fingerprint of
-all its sources beside the cache and, when it differs from the sources being imported, deletes the package's
-cached kernels before any is loaded (they then recompile, ~90 s; ``formation-env warmup`` does it with progress).
+the sources its kernels can depend on (the modules that import numba and everything of the package they import,
+:func:`_sources`) beside the cache and, when it differs from the sources being imported, deletes the package's
+cached kernels before any is loaded (``formation-env warmup`` recompiles them with progress). Editing a module
+outside that set (a task, an env adapter, the Python driver of the Simulation, the CLI) recompiles nothing.
 
 Cache roots: the in-tree ``__pycache__`` directories (numba's default when the package is writable) or, with
 ``NUMBA_CACHE_DIR`` set, that directory (numba's ``<dir name>_<sha1 of its path>`` subdirectories). Only this
@@ -18,23 +20,83 @@ from __future__ import annotations
 
 import hashlib
 import os
+import re
 from pathlib import Path
 
-__all__ = ["PACKAGE_DIR", "FRONT_ENDS", "source_fingerprint", "cache_dirs", "check_kernel_cache"]
+__all__ = ["PACKAGE_DIR", "source_fingerprint", "cache_dirs", "check_kernel_cache"]
 
 PACKAGE_DIR = Path(__file__).resolve().parent
-# layers with no compiled code, which no kernel can import (the layering: the physics and the engine never import
-# them; tests/sim/test_kernel_cache.py checks they mention no numba and that no compiled layer imports them): editing
-# a CLI help string, an env adapter or a task's Python file does not recompile the kernels
-FRONT_ENDS = ("cli", "plotting", "report", "replay", "envs", "tasks")
 _STAMP_NAME = "formation_env_kernel_sources.sha256"
 _CACHE_SUFFIXES = (".nbi", ".nbc")
 
+_FROM = re.compile(r"^[ \t]*from[ \t]+(\.*)([\w.]*)[ \t]+import[ \t]+(\([^)]*\)|[^\n#;]*)", re.M)
+_IMPORT = re.compile(r"^[ \t]*import[ \t]+([\w., \t]+)", re.M)
+
+
+def _module_file(path: Path) -> Path | None:
+    if path.with_suffix(".py").is_file():
+        return path.with_suffix(".py")
+    if (path / "__init__.py").is_file():
+        return path / "__init__.py"
+    return None
+
+
+def _imports(path: Path, text: str, package_dir: Path) -> tuple[list[Path], bool]:
+    """(the package's files ``path`` imports, whether it imports numba), read off its import statements (any
+    indentation, so imports inside functions count; an import quoted in a docstring counts too, which only widens
+    the set)."""
+    found, numba = [], False
+    root = package_dir.parent
+    for m in _IMPORT.finditer(text):
+        for name in m.group(1).replace(" as ", ",").split(","):
+            name = name.strip()
+            numba |= name.split(".")[0] == "numba"
+            if name.startswith(package_dir.name + "."):
+                f = _module_file(root.joinpath(*name.split(".")))
+                found += [f] if f else []
+    for m in _FROM.finditer(text):
+        dots, module, names = m.groups()
+        if not dots:
+            numba |= module.split(".")[0] == "numba"
+            if module.split(".")[0] != package_dir.name:
+                continue
+            target = root.joinpath(*module.split("."))
+        else:
+            target = path.parent
+            for _ in range(len(dots) - 1):
+                target = target.parent
+            target = target.joinpath(*module.split(".")) if module else target
+        for name in names.strip("()").replace("\n", ",").split(","):
+            name = name.split(" as ")[0].strip()
+            if not name or name == "*":
+                name = ""
+            sub = _module_file(target / name) if name else None
+            f = sub or _module_file(target)  # a submodule, else a name from the module (or package) itself
+            found += [f] if f else []
+    return found, numba
+
 
 def _sources(package_dir: Path) -> list[Path]:
-    """The package's sources a compiled kernel can depend on (every ``*.py`` outside :data:`FRONT_ENDS`)."""
-    return sorted(p for p in package_dir.rglob("*.py") if "__pycache__" not in p.parts
-                  and p.relative_to(package_dir).parts[0] not in FRONT_ENDS)
+    """The package's sources a compiled kernel can depend on: every module that imports numba and, transitively,
+    every module of the package they import (a name taken from a package resolves to its submodule when there is
+    one, else to the package's ``__init__``). A kernel can reference only functions and globals of the modules its
+    own module imports, so a module outside this set (the Python driver ``sim/simulation.py``, the env adapters,
+    the tasks, the CLI) can change without any cached kernel going stale."""
+    files = sorted(p for p in package_dir.rglob("*.py") if "__pycache__" not in p.parts)
+    texts = {p: p.read_text(encoding="utf-8") for p in files}
+    edges, stack = {}, []
+    for p in files:
+        edges[p], uses_numba = _imports(p, texts[p], package_dir)
+        if uses_numba:
+            stack.append(p)
+    seen: set[Path] = set()
+    while stack:
+        p = stack.pop()
+        if p in seen:
+            continue
+        seen.add(p)
+        stack.extend(f for f in edges.get(p, ()) if f in texts)
+    return sorted(seen)
 
 
 def source_fingerprint(package_dir: Path = PACKAGE_DIR) -> str:
