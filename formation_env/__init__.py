@@ -3,7 +3,7 @@
 Layers (imports point down only): ``geometry`` -> ``wake`` (ELL) -> ``aircraft`` (Aerosonde
 6-DOF) -> ``sim`` (the public :class:`~formation_env.sim.Simulation`) -> ``tasks`` -> ``rollout`` -> ``envs``
 (docs/architecture.md). ``import formation_env`` registers the Gymnasium ids
-(``formation_env/FormationKeeping-v0`` ...); ``formation_env.parallel_env(...)`` and
+(``formation_env/FormationKeeping-v1`` ...); ``formation_env.parallel_env(...)`` and
 ``formation_env.env(...)`` give the PettingZoo environments. See README.md.
 """
 

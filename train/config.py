@@ -11,15 +11,15 @@ import copy
 from pathlib import Path
 
 __all__ = ["ACTION_MODES", "ENV_KEYS", "HYPERPARAMS_DIR", "load_yaml", "merge_config", "config_section",
+           "task_env_kwargs", "with_task_env", "env_departures",
            "env_config_for", "VALIDATION_SEED_BASE", "TEST_SEED_BASE", "MIN_VALIDATION_EPISODES"]
 
 ACTION_MODES = ("surfaces", "residual", "setpoints")
 HYPERPARAMS_DIR = Path(__file__).resolve().parent / "hyperparams"
 
-# Held-out seeds. Training episodes use the seeds ``seed + f`` (small ints) and then 32-bit draws of
-# numpy's SeedSequence, so any seed >= 2**32 is provably never a training episode's seed.
-VALIDATION_SEED_BASE = 10_000_000_000  # the eval callback's (model selection) episodes
-TEST_SEED_BASE = 20_000_000_000        # `formation-env evaluate`'s default episodes
+# Held-out seeds (the tasks' own: formation_env.tasks): training episodes use the seeds ``seed + f`` (small ints)
+# and then 32-bit draws of numpy's SeedSequence, so any seed >= 2**32 is provably never a training episode's seed.
+from formation_env.tasks.base import TEST_SEED_BASE, VALIDATION_SEED_BASE  # noqa: E402
 # Validation episodes per evaluation recommended for model selection (the default; fewer are allowed,
 # for tests, with a note in the log).
 MIN_VALIDATION_EPISODES = 32
@@ -53,6 +53,52 @@ def merge_config(base: dict, over: dict) -> dict:
             out[k] = merge_config(out[k], v)
         else:
             out[k] = copy.deepcopy(v)
+    return out
+
+
+def task_env_kwargs(scenario: str) -> dict:
+    """The benchmark configuration of the task flown on ``scenario`` in the ``env_kwargs`` form
+    (:meth:`formation_env.tasks.Task.env_kwargs`; {} for a scenario no task poses): what every run starts from,
+    a hyperparameter file's ``env_kwargs`` merging over it as a departure from the task."""
+    from formation_env.tasks import task_for_scenario
+
+    task = task_for_scenario(scenario)
+    return {} if task is None else task.env_kwargs()
+
+
+def with_task_env(params: dict, scenario: str) -> dict:
+    """``params`` (a hyperparameter section) with its ``env_kwargs`` merged over the task's benchmark configuration
+    (:func:`task_env_kwargs`)."""
+    out = copy.deepcopy(params)
+    given = out.get("env_kwargs") or {}
+    if not isinstance(given, dict):
+        raise ValueError(f"env_kwargs must be a mapping of EnvConfig options, got {given!r}")
+    out["env_kwargs"] = merge_config(task_env_kwargs(scenario), given)
+    return out
+
+
+def env_departures(scenario: str, env_kwargs: dict) -> dict:
+    """What ``env_kwargs`` (a run's) sets differently from the task's benchmark configuration ({}: the benchmark
+    task itself), as a mapping of the options (and reward / randomisation fields) that differ."""
+    from formation_env.envs.config import EnvConfig, Randomisation, RewardWeights
+
+    base = task_env_kwargs(scenario)
+    out = {}
+    for k in sorted(set(base) | set(env_kwargs)):
+        a, b = base.get(k), env_kwargs.get(k)
+        if isinstance(a, dict) or isinstance(b, dict):
+            a, b = a or {}, b or {}
+            cls = {"reward": RewardWeights, "randomisation": Randomisation}.get(k)
+            default = (lambda f: getattr(cls(), f, None)) if cls is not None else (lambda f: None)
+            diff = {f: b.get(f, default(f)) for f in sorted(set(a) | set(b))
+                    if a.get(f, default(f)) != b.get(f, default(f))}
+            if diff:
+                out[k] = diff
+        else:
+            field_ = EnvConfig.__dataclass_fields__.get(k)
+            d = field_.default if field_ is not None else None
+            if (d if a is None else a) != (d if b is None else b):
+                out[k] = b
     return out
 
 

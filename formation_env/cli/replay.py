@@ -20,7 +20,7 @@ import time
 from ._args import (MAX_DURATION_S, MAX_GIF_FRAMES, bounded_int, check_min_duration, check_policy_scenario, duration,
                     nonneg_int, positive_int, trained_scenario)
 
-DEFAULT_SEED = 20_000_000_000  # train.config.TEST_SEED_BASE: the first held-out evaluation episode
+DEFAULT_SEED = 20_000_000_000  # formation_env.tasks.TEST_SEED_BASE: the first held-out evaluation episode
 
 
 def _nonneg_sigma(text: str) -> float:

@@ -50,7 +50,8 @@ def register(sub) -> None:
     p.add_argument("--algo", default=None, choices=ALGOS,
                    help="RL algorithm (sb3: required unless --resume; rllib: ppo, the default)")
     p.add_argument("--action-mode", default=None, choices=ACTION_MODES,
-                   help="setpoints (PID tracker offsets, the default everywhere), residual (added to the PID) or surfaces (direct)")
+                   help="setpoints (PID tracker offsets), residual (added to the PID) or surfaces (direct); default: the task's "
+                        "(set-points for every registered task)")
     p.add_argument("--steps", type=bounded_int(1, MAX_TRAIN_STEPS), default=None,
                    help=f"total environment steps, 1..{MAX_TRAIN_STEPS:,} (sb3: agent decisions; rllib: formation "
                         "decisions); default: n_timesteps of the hyperparameters")
@@ -133,7 +134,7 @@ def run(args) -> int:
         raise ValueError(f"{', '.join(given)}: only with --backend rllib")
     from train.sb3.train import train
 
-    train(scenario=args.scenario, algo=args.algo, action_mode=args.action_mode or "residual",
+    train(scenario=args.scenario, algo=args.algo, action_mode=args.action_mode,
           seed=0 if args.seed is None else args.seed, steps=args.steps, config_file=args.config, out_dir=args.out,
           overwrite=args.overwrite, resume=args.resume, progress_bar=args.progress_bar, command=command)
     return 0

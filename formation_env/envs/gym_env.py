@@ -1,21 +1,14 @@
 """Single-agent Gymnasium environments: the learner flies one UAV, the others fly the PID baseline.
 
-Registered ids (on ``import formation_env``):
+Registered ids (on ``import formation_env``): one per registered task (:mod:`formation_env.tasks`), its id
+``Task.gym_id`` carrying the task's version (``formation_env/CloseFormation-v1``). ``gym.make(id)`` gives the
+task's benchmark configuration (``Task.options``: the reward, action interface and training randomisation every
+result on the task is trained with); the learner is the task's ``gym_learner`` (the first follower, uav_1, or the
+single UAV of a one-UAV scenario), the other UAVs fly the thesis PID.
 
-=======================================  =================  ==========================
-id                                       scenario           learner
-=======================================  =================  ==========================
-formation_env/FormationKeeping-v0        formation_keeping  follower (uav_1)
-formation_env/Reconfiguration-v0         reconfiguration    follower (uav_1)
-formation_env/Gust-v0                    gust               the single UAV (uav_0)
-formation_env/Tracking-v0                tracking           the single UAV (uav_0)
-formation_env/Echelon-v0                 echelon            first follower (uav_1)
-formation_env/Vee-v0                     vee                first follower (uav_1)
-formation_env/CloseFormation-v0          close_formation    follower (uav_1)
-=======================================  =================  ==========================
-
-Keyword arguments of ``gymnasium.make`` go to :class:`~formation_env.envs.config.EnvConfig`
-(e.g. ``action_mode="residual"``, ``randomisation=Randomisation(...)``), plus ``learner`` (the UAV
+Keyword arguments of ``gymnasium.make`` replace options of the benchmark configuration
+(:class:`~formation_env.envs.config.EnvConfig`, e.g. ``action_mode="residual"``, ``randomisation=Randomisation(...)``),
+plus ``learner`` (the UAV
 index; ``learning=(i,)`` means the same) and ``render_mode``. An unknown keyword raises ``TypeError``,
 a bad value ``ValueError``. An id fixes its scenario: ``scenario=`` (or a ``config``) naming another one is a
 ``ValueError`` (use that scenario's id, or :func:`formation_env.parallel_env` for any scenario). Each id's ``spec.max_episode_steps`` is one full episode at 10 Hz.

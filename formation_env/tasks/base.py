@@ -1,23 +1,79 @@
 """What a task is and the registry of tasks.
 
-A :class:`Task` is one self-contained unit: its scenario (flight path, slots, safe box), the preset that
-poses it for learning (reward weights, action interface, randomisation), where it has one its reference
-optimum and its metrics, and the names of the baselines it is judged against (the agents themselves live in
-the top-level ``agents`` package: ``formation_env`` never imports it). Adding a task means adding one unit
-under :mod:`formation_env.tasks` and calling :func:`register_task`; its Gymnasium id follows.
+A :class:`Task` is one self-contained unit: its scenario (flight path, slots, safe box), its benchmark
+configuration (the observation, action interface, reward weights and training randomisation every result on
+it is reported with: ``gym.make(task.gym_id)``, :func:`formation_env.parallel_env`, the vector envs and
+``formation-env train`` all start from it), its evaluation protocol (held-out seeds, turbulence levels, episodes,
+headline metric), where it has one its reference optimum and its metrics, the names of the baselines it is
+judged against and of the safety guard its published policies fly with (the agents themselves live in the
+top-level ``agents`` package: ``formation_env`` never imports it), and its version. Adding a task means adding
+one unit under :mod:`formation_env.tasks` and calling :func:`register_task`; its Gymnasium id follows.
 """
 
 from __future__ import annotations
 
+import dataclasses
 import importlib
+import re
 from collections.abc import Callable
 from dataclasses import dataclass, field
 
 from ..scenarios import Scenario, get_scenario, register_scenario
-from ..sim.config import EnvConfig
+from ..sim.config import EnvConfig, Randomisation, RewardWeights
 
-__all__ = ["Task", "register_task", "get_task", "task_names", "TASKS", "task_options", "task_for_scenario", "make_config",
-           "gym_ids", "task_learning"]
+__all__ = ["Task", "EvaluationProtocol", "register_task", "get_task", "task_names", "TASKS", "task_options",
+           "task_for_scenario", "make_config", "gym_ids", "task_learning", "TEST_SEED_BASE", "VALIDATION_SEED_BASE",
+           "HEADLINE_METRICS"]
+
+# Held-out seeds. Training episodes use the seeds ``seed + f`` (small ints) and then 32-bit draws of numpy's
+# SeedSequence, so any seed >= 2**32 is provably never a training episode's seed.
+VALIDATION_SEED_BASE = 10_000_000_000  # the training's validation (model selection) episodes
+TEST_SEED_BASE = 20_000_000_000        # the test episodes every result is reported on
+
+#: headline metric -> (label, higher is better): the per-episode quantities a task can be judged by
+HEADLINE_METRICS = {
+    "harvest_ratio": ("harvest ratio (induced-drag saving / the task's optimum)", True),
+    "formation_saving": ("formation saving (every UAV's mean induced-drag saving)", True),
+    "reconfig_success": ("success (in the 1-span window at the end)", True),
+    "rms_slot_error_m": ("RMS slot error, m", False),
+}
+
+
+@dataclass(frozen=True)
+class EvaluationProtocol:
+    """How a task's results are made: ``episodes`` held-out episodes per turbulence level (``levels``, the
+    frozen von Karman field's sigma in m/s) on the seeds ``seed_base``, ``seed_base + 1``, ...; ``metric`` the
+    headline per-episode metric (:data:`HEADLINE_METRICS`), reported at ``headline_level``. ``preset``: the
+    EnvConfig options of the test episodes where they are not the generic test distribution (the benchmark
+    task's reward, its randomisation at the level, the saving computed): a task whose episodes draw more than
+    the turbulence (wake_surfing's crosswind and leader manoeuvre). None: the generic distribution, the
+    scenario with the task's ``test_randomisation``."""
+
+    levels: tuple = (0.0, 1.0, 1.5)
+    headline_level: float = 1.0
+    episodes: int = 100
+    seed_base: int = TEST_SEED_BASE
+    metric: str = "rms_slot_error_m"
+    preset: dict | None = None
+
+    def __post_init__(self) -> None:
+        if self.metric not in HEADLINE_METRICS:
+            raise ValueError(f"EvaluationProtocol.metric must be one of {sorted(HEADLINE_METRICS)}, got {self.metric!r}")
+        if self.headline_level not in self.levels:
+            raise ValueError(f"EvaluationProtocol.headline_level {self.headline_level!r} is not one of its levels "
+                             f"{self.levels!r}")
+        if not 1 <= self.episodes <= 100_000:
+            raise ValueError(f"EvaluationProtocol.episodes must be in [1, 100000], got {self.episodes!r}")
+        if not 2**32 <= self.seed_base <= 2**62:
+            raise ValueError(f"EvaluationProtocol.seed_base must be in [2**32, 2**62] (never a training seed), "
+                             f"got {self.seed_base!r}")
+
+    @property
+    def higher_is_better(self) -> bool:
+        return HEADLINE_METRICS[self.metric][1]
+
+
+_ID = re.compile(r"^[A-Za-z0-9_]+/[A-Za-z0-9]+$")
 
 
 @dataclass(frozen=True)
@@ -32,11 +88,19 @@ class Task:
     the training's validation) draws besides the turbulence level, so that even calm-air episodes differ;
     ``learning``: the UAVs that are agents when the task is trained and evaluated (an EnvConfig ``learning``:
     "followers", vehicle 0 flying the thesis PID on its track, or "all" where vehicle 0 must be flown like the
-    others, e.g. in another UAV's wake)."""
+    others, e.g. in another UAV's wake).
+
+    ``options`` is the task's benchmark configuration: the EnvConfig options (action interface, reward
+    weights, the training randomisation, the saving computed) that every result on the task is trained with
+    and that ``gym.make(gym_id)`` gives (:meth:`default_config`). ``gym_name`` is the id without its version
+    (``formation_env/CloseFormation``); ``gym_id`` adds ``-v{version}``. ``version`` changes whenever the task's
+    behaviour does (tests/tasks/test_task_versions.py holds a fingerprint of each version). ``guard``: the name
+    of the safety filter (``agents``) the task's published policies fly with, None where they fly without one;
+    ``guard_options`` its gains. ``evaluation``: the protocol its results are made with."""
 
     name: str
     scenario: object
-    gym_id: str | None = None
+    gym_name: str | None = None
     gym_learner: int = 1
     options: dict = field(default_factory=dict)
     baselines: tuple = ("pid", "pid_formation")
@@ -45,10 +109,58 @@ class Task:
     description: str = ""
     test_randomisation: dict = field(default_factory=dict)
     learning: str = "followers"
+    version: int = 1
+    guard: str | None = None
+    guard_options: dict = field(default_factory=dict)
+    evaluation: EvaluationProtocol = field(default_factory=EvaluationProtocol)
 
     def __post_init__(self) -> None:
         if self.learning not in ("followers", "all"):
             raise ValueError(f"Task.learning must be 'followers' or 'all', got {self.learning!r}")
+        if isinstance(self.version, bool) or not isinstance(self.version, int) or self.version < 0:
+            raise ValueError(f"Task.version must be an integer >= 0, got {self.version!r}")
+        if self.gym_name is not None and not _ID.match(self.gym_name):
+            raise ValueError(f"Task.gym_name must look like 'namespace/Name' (no version: Task.version adds it), "
+                             f"got {self.gym_name!r}")
+        if self.guard not in (None, "separation_guard"):
+            raise ValueError(f"Task.guard must be None or 'separation_guard', got {self.guard!r}")
+        if not isinstance(self.evaluation, EvaluationProtocol):
+            raise ValueError(f"Task.evaluation must be an EvaluationProtocol, got {self.evaluation!r}")
+        bad = sorted(set(self.options) - set(EnvConfig.__dataclass_fields__) - {"scenario"})
+        if bad or "scenario" in self.options:
+            raise ValueError(f"Task.options: not EnvConfig options {bad or ['scenario']}")
+
+    @property
+    def gym_id(self) -> str | None:
+        """The Gymnasium id of this version of the task (None: a task without one)."""
+        return None if self.gym_name is None else f"{self.gym_name}-v{self.version}"
+
+    def default_config(self, **overrides) -> EnvConfig:
+        """The task's benchmark EnvConfig (its scenario and :attr:`options`, who learns as :attr:`learning`), with
+        ``overrides`` (EnvConfig options) replacing any of them: the environment every result on the task is
+        trained with."""
+        opts = {"learning": self.learning, **self.options, **overrides}
+        return make_config(scenario=self.scenario_name, **opts)
+
+    def env_kwargs(self) -> dict:
+        """:attr:`options` as plain data in the hyperparameter files' ``env_kwargs`` form (``reward`` and
+        ``randomisation`` as mappings of the fields that differ from their defaults; ``action_mode`` left out, a
+        run's own setting): what a training run's sidecar records."""
+        out = {}
+        for k, v in self.options.items():
+            if k == "action_mode":
+                continue
+            if isinstance(v, (RewardWeights, Randomisation)):
+                default = type(v)()
+                v = {f.name: getattr(v, f.name) for f in dataclasses.fields(v)
+                     if getattr(v, f.name) != getattr(default, f.name)}
+            out[k] = v
+        return out
+
+    @property
+    def action_mode(self) -> str:
+        """The action interface of the benchmark (its ``options``' ``action_mode``, else EnvConfig's default)."""
+        return self.options.get("action_mode", EnvConfig.__dataclass_fields__["action_mode"].default)
 
     @property
     def scenario_name(self) -> str:
@@ -120,8 +232,8 @@ def task_learning(scenario) -> str:
 
 
 def gym_ids() -> dict[str, tuple[str, int]]:
-    """Gymnasium id -> (scenario, learner index) of every registered task that has one."""
-    return {t.gym_id: (t.scenario_name, t.gym_learner) for t in TASKS.values() if t.gym_id}
+    """Gymnasium id (with its version) -> (scenario, learner index) of every registered task that has one."""
+    return {t.gym_id: (t.scenario_name, t.gym_learner) for t in TASKS.values() if t.gym_name}
 
 
 def make_config(config: EnvConfig | None = None, **options) -> EnvConfig:

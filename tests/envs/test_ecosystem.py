@@ -14,7 +14,7 @@ import formation_env
 from formation_env.sim.simulation import INFO_REWARD_KEYS
 from formation_env.envs.observations import observation_size
 
-ID = "formation_env/FormationKeeping-v0"
+ID = "formation_env/FormationKeeping-v1"
 
 
 # ---------------------------------------------------------------- TorchRL

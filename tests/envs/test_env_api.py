@@ -58,7 +58,7 @@ def test_unknown_options_raise_type_error_naming_them_bad_values_value_error():
         "make_config": lambda **kw: make_config(**kw),
         "parallel_env": lambda **kw: formation_env.parallel_env("formation_keeping", **kw),
         "env": lambda **kw: formation_env.env("formation_keeping", **kw),
-        "gym.make": lambda **kw: gym.make("formation_env/FormationKeeping-v0", **kw),
+        "gym.make": lambda **kw: gym.make("formation_env/FormationKeeping-v1", **kw),
         "FormationVecEnv": lambda **kw: FormationVecEnv(1, scenario="formation_keeping", **kw),
         "FormationVectorEnv": lambda **kw: FormationVectorEnv(1, scenario="formation_keeping", **kw),
     }
@@ -73,17 +73,17 @@ def test_unknown_options_raise_type_error_naming_them_bad_values_value_error():
 
 
 def test_gym_learning_selects_the_learner_or_says_why_not():
-    env = gym.make("formation_env/FormationKeeping-v0", learning=(0,), duration_s=2.0)
+    env = gym.make("formation_env/FormationKeeping-v1", learning=(0,), duration_s=2.0)
     assert env.unwrapped.learner == 0 and env.unwrapped.agent == "uav_0"
-    assert gym.make("formation_env/FormationKeeping-v0").unwrapped.agent == "uav_1"  # the id's default
-    assert gym.make("formation_env/Gust-v0").unwrapped.agent == "uav_0"
+    assert gym.make("formation_env/FormationKeeping-v1").unwrapped.agent == "uav_1"  # the id's default
+    assert gym.make("formation_env/Gust-v1").unwrapped.agent == "uav_0"
     for learning in ("all", (0, 1)):
         with pytest.raises(ValueError, match="one learner"):
-            gym.make("formation_env/FormationKeeping-v0", learning=learning)
+            gym.make("formation_env/FormationKeeping-v1", learning=learning)
     with pytest.raises(ValueError, match="disagree"):
-        gym.make("formation_env/FormationKeeping-v0", learning=(0,), learner=1)
+        gym.make("formation_env/FormationKeeping-v1", learning=(0,), learner=1)
     with pytest.raises(ValueError, match="out of range"):
-        gym.make("formation_env/FormationKeeping-v0", learner=2)
+        gym.make("formation_env/FormationKeeping-v1", learner=2)
 
 
 def test_non_integer_learning_indices_are_rejected():
@@ -102,7 +102,7 @@ def test_complex_actions_are_rejected_naming_the_agent_or_index():
     env.reset(seed=0)
     with pytest.raises(ValueError, match="uav_1.*complex"):
         env.step({"uav_1": np.array([0, 1j, 0, 0])})
-    genv = gym.make("formation_env/FormationKeeping-v0")
+    genv = gym.make("formation_env/FormationKeeping-v1")
     genv.reset(seed=0)
     with pytest.raises(ValueError, match="complex"):
         genv.unwrapped.step(np.zeros(4, complex))
@@ -122,7 +122,7 @@ def test_every_id_has_max_episode_steps_of_one_episode():
         steps = gym.spec(env_id).max_episode_steps
         assert steps == round(get_scenario(scenario).duration_s * EnvConfig().control_hz), env_id
     # the env itself truncates at duration x control rate: the id's limit is the same count
-    env = gym.make("formation_env/FormationKeeping-v0", duration_s=2.0, max_episode_steps=-1)
+    env = gym.make("formation_env/FormationKeeping-v1", duration_s=2.0, max_episode_steps=-1)
     env.reset(seed=0)
     n, trunc = 0, False
     while not trunc:

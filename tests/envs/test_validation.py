@@ -116,11 +116,11 @@ def test_every_config_in_the_repository_lies_inside_the_ranges():
 
 # ---------------------------------------------------------------- Gymnasium ids fix their scenario
 def test_a_registered_id_refuses_another_scenario():
-    with pytest.raises(ValueError, match=r"'formation_keeping'.*'vee'.*formation_env/Vee-v0.*parallel_env"):
-        gym.make("formation_env/FormationKeeping-v0", scenario="vee")
+    with pytest.raises(ValueError, match=r"'formation_keeping'.*'vee'.*formation_env/Vee-v1.*parallel_env"):
+        gym.make("formation_env/FormationKeeping-v1", scenario="vee")
     with pytest.raises(ValueError, match="flies scenario 'gust'"):
-        gym.make("formation_env/Gust-v0", scenario="tracking")
-    env = gym.make("formation_env/Vee-v0", scenario="vee", duration_s=1.0)  # its own scenario: fine
+        gym.make("formation_env/Gust-v1", scenario="tracking")
+    env = gym.make("formation_env/Vee-v1", scenario="vee", duration_s=1.0)  # its own scenario: fine
     assert env.unwrapped.config.scenario == "vee"
 
 
@@ -128,7 +128,7 @@ def test_a_registered_id_refuses_another_scenario():
 @pytest.mark.parametrize("maker", ["parallel", "gym", "aec"])
 def test_unknown_reset_options_are_a_type_error_listing_the_valid_ones(maker):
     make = {"parallel": lambda: formation_env.parallel_env("formation_keeping", duration_s=1.0),
-            "gym": lambda: gym.make("formation_env/FormationKeeping-v0", duration_s=1.0),
+            "gym": lambda: gym.make("formation_env/FormationKeeping-v1", duration_s=1.0),
             "aec": lambda: formation_env.env("formation_keeping", duration_s=1.0)}[maker]
     for bad in ({"scenario": "vee"}, {"duration_s": 1}):
         with pytest.raises(TypeError, match=rf"{next(iter(bad))}.*steady_wind_ned"):
@@ -141,7 +141,7 @@ def test_reset_options_reach_the_simulation():
     assert env.sim.state.steady_wind[0].tolist() == [0.0, 3.0, 0.0]
     with pytest.raises(ValueError, match="steady_wind_ned"):
         env.reset(seed=0, options={"steady_wind_ned": [0.0, 1e9, 0.0]})
-    genv = gym.make("formation_env/FormationKeeping-v0", duration_s=1.0)
+    genv = gym.make("formation_env/FormationKeeping-v1", duration_s=1.0)
     genv.reset(seed=0, options={"steady_wind_ned": [1.0, 0.0, 0.0]})
     assert genv.unwrapped._par.sim.state.steady_wind[0].tolist() == [1.0, 0.0, 0.0]
     env.reset(seed=0, options={"options": 1})  # PettingZoo's api tests' placeholder: accepted and ignored
@@ -157,7 +157,7 @@ def test_bool_actions_are_rejected_everywhere():
         env.step({a: np.ones(4, bool) for a in env.agents})
     with pytest.raises(ValueError, match="uav_1.*boolean"):
         env.step({"uav_0": np.zeros(4), "uav_1": [True, False, True, False]})
-    genv = gym.make("formation_env/FormationKeeping-v0", duration_s=1.0)
+    genv = gym.make("formation_env/FormationKeeping-v1", duration_s=1.0)
     genv.reset(seed=0)
     with pytest.raises(ValueError, match="boolean"):
         genv.unwrapped.step(np.ones(4, bool))
@@ -209,7 +209,7 @@ def test_step_before_any_reset_says_call_reset_first():
     env = formation_env.parallel_env("formation_keeping", duration_s=1.0)
     with pytest.raises(RuntimeError, match=r"before any reset\(\).*call reset\(\) first"):
         env.step({a: np.zeros(4) for a in env.possible_agents})
-    genv = gym.make("formation_env/FormationKeeping-v0", duration_s=1.0).unwrapped
+    genv = gym.make("formation_env/FormationKeeping-v1", duration_s=1.0).unwrapped
     with pytest.raises(RuntimeError, match=r"before any reset\(\)"):
         genv.step(np.zeros(4, np.float32))
     for venv in (FormationVecEnv(1, scenario="formation_keeping", learning="followers", duration_s=1.0),

@@ -51,7 +51,7 @@ def test_the_variant_poses_the_task_with_the_leader_drawn():
     assert r.random_leader and r.any_manoeuvre and not WAKE_SURFING_RANDOMISATION.random_leader
     task = get_task("wake_surfing_random_leader")
     assert task.get_scenario().safe_box_b == get_task("wake_surfing").get_scenario().safe_box_b
-    env = gym.make("formation_env/WakeSurfingRandomLeader-v0")
+    env = gym.make("formation_env/WakeSurfingRandomLeader-v1")
     try:
         cfg = env.unwrapped.config
         assert cfg.scenario == "wake_surfing_random_leader" and cfg.randomisation == r

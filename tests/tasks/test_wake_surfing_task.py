@@ -198,7 +198,7 @@ def test_leaving_the_box_never_pays_and_the_cap_never_clips_an_optimum(crab_deg)
 # ------------------------------------------------------------------ the task's interfaces
 
 def test_gym_id_and_parallel_env_pose_the_task():
-    env = gym.make("formation_env/WakeSurfing-v0")
+    env = gym.make("formation_env/WakeSurfing-v1")
     try:
         cfg = env.unwrapped.config
         assert cfg.action_mode == "setpoints" and cfg.compute_benefit

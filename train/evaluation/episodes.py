@@ -36,8 +36,9 @@ def eval_env_config(scenario: str, action_mode: str, *, turbulence_sigma_mps: fl
     its defaults (sigma 1 m/s, wake on, the scenario's duration, no other randomisation than the task's
     ``test_randomisation``: close_formation jitters the follower's start by 0.3 m; the benefit computed for a
     task with a reference optimum, whose harvest ratio needs it) it is the test set's distribution, which the training's validation (model selection) also uses. A scenario with a
-    task preset (:mod:`formation_env.tasks`: ``wake_surfing``) keeps its preset's randomisation and
-    reward, with the benefit on, at ``turbulence_sigma_mps`` (None: the preset's level). ``wake_fidelity`` None: the
+    task whose evaluation protocol has a preset (:attr:`formation_env.tasks.EvaluationProtocol.preset`: ``wake_surfing``)
+    flies its preset's randomisation and reward, with the benefit on, at ``turbulence_sigma_mps`` (None: the preset's
+    level). ``wake_fidelity`` None: the
     scenario's (formation_env.sim.formation.WAKE_FIDELITIES; a record flown before a task changed fidelity is re-flown
     with the fidelity it records). ``throttle_max``: the flight control's throttle ceiling (1: the Aerosonde's; above 1
     the counterfactual engine of the ceiling measurements, :class:`formation_env.envs.config.EnvConfig`).
@@ -45,24 +46,23 @@ def eval_env_config(scenario: str, action_mode: str, *, turbulence_sigma_mps: fl
     scenario's. ``neighbour_wind``, ``neighbour_attitude``: the observation options a policy was trained with
     (EnvConfig's)."""
     from formation_env.envs.config import EnvConfig, Randomisation
-    from formation_env.tasks import task_for_scenario, task_learning, task_options
+    from formation_env.tasks import task_for_scenario, task_learning
 
     if turbulence_field is None:
         turbulence_field = EnvConfig.turbulence_field  # the dataclass default
-    task = task_options(scenario)
-    if task:  # a task preset (wake_surfing): its randomisation, reward and benefit, with this turbulence
-        rnd = task.pop("randomisation")
+    t = task_for_scenario(scenario)
+    preset = None if t is None or t.evaluation.preset is None else dict(t.evaluation.preset)
+    if preset:  # the task's own test distribution (wake_surfing): its randomisation, reward and benefit, at this level
+        rnd = preset.pop("randomisation")
         if turbulence_sigma_mps is not None:
             rnd = dataclasses.replace(rnd, turbulence_sigma_mps=turbulence_sigma_mps)
-        task.pop("action_mode", None)
-        task["compute_benefit"] = True
+        preset["compute_benefit"] = True
         return EnvConfig(scenario=scenario, learning=task_learning(scenario), action_mode=action_mode, wake=wake,
                          control_hz=control_hz, duration_s=duration_s, turbulence_field=turbulence_field,
                          wake_fidelity=wake_fidelity, throttle_max=throttle_max, leader_reference=leader_reference,
-                         neighbour_wind=neighbour_wind, neighbour_attitude=neighbour_attitude, randomisation=rnd, **task)
+                         neighbour_wind=neighbour_wind, neighbour_attitude=neighbour_attitude, randomisation=rnd, **preset)
     if turbulence_sigma_mps is None:
         turbulence_sigma_mps = DEFAULT_TURBULENCE_SIGMA_MPS
-    t = task_for_scenario(scenario)
     extra = dict(t.test_randomisation) if t is not None else {}
     # a task judged by its harvest (close_formation) always computes the saving its metric is made of
     compute_benefit = compute_benefit or (t is not None and t.reference is not None)

@@ -73,11 +73,35 @@ def policy_metadata(path: Path) -> dict:
     return {}
 
 
+def warn_task_version(spec: str, meta: dict) -> str | None:
+    """Warn (``UserWarning``) when a policy was trained on another version of its task than the registered one,
+    or on a scenario whose task version it does not record; returns the warning's text (None: no warning)."""
+    import warnings
+
+    from formation_env.tasks import task_for_scenario
+
+    task = task_for_scenario(meta.get("scenario"))
+    if task is None:
+        return None
+    trained = meta.get("task_version")
+    if trained == task.version:
+        return None
+    what = "an unrecorded version" if trained is None else f"version {trained}"
+    text = (f"policy {spec!r} was trained on {what} of task {task.name!r}, not on {task.gym_id or task.name} "
+            f"(version {task.version}): its results are not comparable with this version's")
+    warnings.warn(text, UserWarning, stacklevel=3)
+    return text
+
+
 def load_policy(spec: str, *, action_mode: str | None = None, name: str | None = None, device: str = "cpu") -> EvalPolicy:
     """``"pid"`` (the thesis FCS: zero residual), ``"pid_formation"`` (the classical formation-keeping
     baseline of ``agents.pid_formation``), ``"station_keeper"`` (``agents.station_keeper``), the path of an SB3 zip (its algo and action mode come from
     the sidecar JSON or the run's config.yaml; ``action_mode`` overrides), or an RLlib checkpoint / run
-    directory of ``formation-env train --backend rllib`` (its metadata fixes the action mode)."""
+    directory of ``formation-env train --backend rllib`` (its metadata fixes the action mode).
+
+    Security: an SB3 zip is read without unpickling anything (:mod:`train.evaluation.safe_zip`; a file that is not
+    one of this project's is a ``ValueError`` saying it is not a readable policy). An RLlib checkpoint is restored
+    by Ray, which unpickles it: it runs code, so load only checkpoints you trust (docs/reliability.md)."""
     if spec == "pid":
         return _pid_policy()
     if spec in CLASSICAL_AGENTS:
@@ -98,27 +122,20 @@ def load_policy(spec: str, *, action_mode: str | None = None, name: str | None =
     if not path.is_file():
         raise ValueError(f"policy file {spec!r} does not exist (give an SB3 .zip, an RLlib checkpoint directory, "
                          "'pid', 'pid_formation' or 'station_keeper')")
+    from .safe_zip import load_sb3_model, read_policy_zip
+
+    read_policy_zip(path, repr(spec))  # not a zip, truncated or corrupt: one line saying so, before anything else
     meta = policy_metadata(path)
+    warn_task_version(spec, meta)
     mode = action_mode or meta.get("action_mode")
     if mode is None:
         raise ValueError(f"policy {spec!r}: its action mode is unknown (no {path.with_suffix('.json').name} or "
                          "config.yaml beside it); pass --action-mode")
     if mode not in ACTION_MODES:
         raise ValueError(f"unknown action mode {mode!r}; choose one of {ACTION_MODES}")
-    from stable_baselines3 import PPO, SAC, TD3
-
-    classes = {"ppo": PPO, "sac": SAC, "td3": TD3}
     algo = meta.get("algo")
-    order = [algo] if algo in ALGOS else list(ALGOS)
-    model, errors = None, []
-    for a in order:
-        try:
-            model = classes[a].load(str(path), device=device)
-            break
-        except Exception as exc:  # noqa: BLE001 - try the next algorithm
-            errors.append(f"{a}: {exc}")
-    if model is None:
-        raise ValueError(f"policy {spec!r} is not a loadable SB3 PPO/SAC/TD3 zip ({'; '.join(errors)})")
+    # no pickle in the zip is unpickled (train/evaluation/safe_zip.py): a policy file cannot run code on load
+    model = load_sb3_model(path, algo if algo in ALGOS else None, device=device, label=repr(spec))
 
     def act(obs: np.ndarray) -> np.ndarray:
         return model.predict(obs, deterministic=True)[0]

@@ -8,7 +8,7 @@ import math
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 
-from ..config import ENV_KEYS, HYPERPARAMS_DIR, config_section, env_config_for, load_yaml, merge_config
+from ..config import ENV_KEYS, HYPERPARAMS_DIR, config_section, env_config_for, load_yaml, merge_config, with_task_env
 
 __all__ = ["RLlibTrainConfig", "load_rllib_hyperparams", "env_config_dict", "build_algo_config", "POLICY_MODES",
            "LEARNING_MODES"]
@@ -136,11 +136,12 @@ class RLlibTrainConfig:
 
 
 def load_rllib_hyperparams(scenario: str, config_file: str | Path | None = None) -> dict:
-    """``train/hyperparams/rllib_ppo.yml`` for ``scenario``, with ``config_file`` merged over it."""
+    """``train/hyperparams/rllib_ppo.yml`` for ``scenario``, with ``config_file`` merged over it, its ``env_kwargs``
+    merged over the task's benchmark configuration."""
     params = config_section(load_yaml(HYPERPARAMS_DIR / "rllib_ppo.yml"), scenario)
     if config_file is not None:
         params = merge_config(params, config_section(load_yaml(config_file), scenario))
-    return params
+    return with_task_env(params, scenario)
 
 
 def env_config_dict(cfg: RLlibTrainConfig, episode_stream: int = 0) -> dict:

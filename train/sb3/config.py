@@ -38,7 +38,7 @@ from dataclasses import asdict, dataclass, field
 from pathlib import Path
 
 from ..config import (ACTION_MODES, ENV_KEYS, HYPERPARAMS_DIR, MIN_VALIDATION_EPISODES, config_section, env_config_for,
-                      load_yaml, merge_config)
+                      load_yaml, merge_config, with_task_env)
 
 __all__ = ["ALGOS", "TrainConfig", "load_hyperparams", "make_env_config"]
 
@@ -209,13 +209,15 @@ def _check_policy_kwargs(kwargs: dict) -> None:
 
 
 def load_hyperparams(algo: str, scenario: str, config_file: str | Path | None = None) -> dict:
-    """The merged hyperparameters of ``algo`` on ``scenario`` (defaults, then ``config_file``)."""
+    """The merged hyperparameters of ``algo`` on ``scenario`` (defaults, then ``config_file``), their
+    ``env_kwargs`` merged over the task's benchmark configuration (a file's ``env_kwargs`` is a departure from the
+    task, which the run's sidecar records)."""
     if algo not in ALGOS:
         raise ValueError(f"unknown algo {algo!r}; choose one of {ALGOS}")
     params = config_section(load_yaml(HYPERPARAMS_DIR / f"{algo}.yml"), scenario)
     if config_file is not None:
         params = merge_config(params, config_section(load_yaml(config_file), scenario))
-    return params
+    return with_task_env(params, scenario)
 
 
 @dataclass
@@ -350,7 +352,7 @@ class TrainConfig:
             raise ValueError(f"unknown env_kwargs key(s) {bad}; valid: {sorted(ENV_KEYS)}")
         self.algo_kwargs = _check_hyperparameters(self.algo, self.algo_kwargs)
         _check_policy_kwargs(self.policy_kwargs)
-        make_env_config(self)  # validates the environment options
+        _check_batch_fits(self, make_env_config(self))  # validates the environment options too
 
     @classmethod
     def from_hyperparams(cls, params: dict, *, scenario: str, algo: str, action_mode: str, seed: int,
@@ -372,6 +374,27 @@ class TrainConfig:
     @classmethod
     def from_dict(cls, data: dict) -> TrainConfig:
         return cls(**data)
+
+
+def _check_batch_fits(cfg: TrainConfig, env) -> None:
+    """A minibatch fits in what it is drawn from: PPO's rollout (n_steps x env indices), SAC/TD3's replay buffer."""
+    kw = cfg.algo_kwargs
+    batch = kw.get("batch_size", 64 if cfg.algo == "ppo" else 256)  # SB3's defaults
+    if cfg.algo == "ppo":
+        from formation_env.scenarios import get_scenario
+
+        n = get_scenario(cfg.scenario).n_vehicles
+        agents = {"all": n, "followers": n - 1}.get(env.learning, None) if isinstance(env.learning, str) \
+            else len(env.learning)
+        n_steps = kw.get("n_steps", 2048)
+        rollout = n_steps * cfg.n_formations * agents
+        if batch > rollout:
+            raise ValueError(f"batch_size {batch} is larger than the rollout it is drawn from: n_steps {n_steps} x "
+                             f"n_formations {cfg.n_formations} x {agents} agent(s) = {rollout} samples; give "
+                             f"batch_size <= {rollout} (or more n_steps / n_formations)")
+    elif batch > kw.get("buffer_size", 1_000_000):
+        raise ValueError(f"batch_size {batch} is larger than the replay buffer (buffer_size "
+                         f"{kw.get('buffer_size', 1_000_000)}); give batch_size <= buffer_size")
 
 
 def make_env_config(cfg: TrainConfig, **overrides):

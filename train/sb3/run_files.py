@@ -48,6 +48,23 @@ def latest_checkpoint(run_dir: str | Path) -> tuple[Path, int] | None:
     return path, steps
 
 
+def task_stamp(scenario: str, env_kwargs: dict, action_mode: str) -> dict:
+    """The task and version a run was made on and how its environment departs from the task's benchmark
+    configuration ({} for a scenario no task poses): ``{"task": name, "task_version": v, "departures": {...}}``, the
+    departures empty when the run trained on the benchmark task itself."""
+    from formation_env.tasks import task_for_scenario
+
+    from ..config import env_departures
+
+    task = task_for_scenario(scenario)
+    if task is None:
+        return {}
+    departures = env_departures(scenario, env_kwargs)
+    if action_mode != task.action_mode:
+        departures["action_mode"] = action_mode
+    return {"task": task.name, "task_version": task.version, "departures": departures}
+
+
 def run_metadata(cfg: TrainConfig, steps: int, extra: dict | None = None) -> dict:
     """The metadata sidecar (``NAME.json``) of a model saved at ``steps``."""
     env = make_env_config(cfg)
@@ -61,6 +78,7 @@ def run_metadata(cfg: TrainConfig, steps: int, extra: dict | None = None) -> dic
         d["neighbour_attitude"] = True  # the same
     if cfg.residual_on is not None:
         d["residual_on"] = cfg.residual_on  # the agent the learner's actions are added to, and their scale
+    d.update(task_stamp(cfg.scenario, cfg.env_kwargs, cfg.action_mode))
     if extra:
         d.update(extra)
     return d

@@ -155,11 +155,21 @@ def steps_to_run(model, asked: int) -> tuple[int, str]:
         why = f"the {n_envs} env indices step together"
     return -(-asked // chunk) * chunk, why
 
-def train(*, scenario: str | None = None, algo: str | None = None, action_mode: str = "setpoints", seed: int = 0,
+def default_action_mode(scenario: str) -> str:
+    """The action interface of the task flown on ``scenario`` (:attr:`formation_env.tasks.Task.action_mode`), or
+    set-points for a scenario no task poses."""
+    from formation_env.tasks import task_for_scenario
+
+    task = task_for_scenario(scenario)
+    return "setpoints" if task is None else task.action_mode
+
+
+def train(*, scenario: str | None = None, algo: str | None = None, action_mode: str | None = None, seed: int = 0,
           steps: int | None = None, config_file: str | Path | None = None, out_dir: str | Path | None = None,
           overwrite: bool = False, resume: bool = False, progress_bar: bool | None = None,
           overrides: dict | None = None, log: Callable[[str], None] | None = None, command: str | None = None) -> dict:
-    """Train (or resume) one run; returns its summary. ``overrides``: hyperparameters merged last
+    """Train (or resume) one run; returns its summary. ``action_mode`` None: the task's (its benchmark
+    configuration's; set-points where no task poses the scenario). ``overrides``: hyperparameters merged last
     (a dict in the YAML format, used by the tests for tiny runs)."""
     import torch
     import yaml
@@ -190,6 +200,8 @@ def train(*, scenario: str | None = None, algo: str | None = None, action_mode: 
     else:
         if scenario is None or algo is None:
             raise ValueError("give --scenario and --algo")
+        if action_mode is None:
+            action_mode = default_action_mode(scenario)
         params = load_hyperparams(algo, scenario, config_file)
         if overrides:
             params = merge_config(params, overrides)

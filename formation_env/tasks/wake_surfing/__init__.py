@@ -30,7 +30,7 @@ import dataclasses
 
 from ...scenarios import Scenario, SlotSchedule
 from ...sim.config import Randomisation, RewardWeights
-from ..base import Task, register_task
+from ..base import EvaluationProtocol, Task, register_task
 
 __all__ = ["SCENARIO", "TASK", "WAKE_SURFING_REWARD", "WAKE_SURFING_RANDOMISATION", "BASELINES",
            "RANDOM_LEADER_SCENARIO", "RANDOM_LEADER_TASK", "RANDOM_LEADER_RANDOMISATION"]
@@ -75,16 +75,24 @@ SCENARIO = Scenario(
 # tests/tasks/test_wake_surfing_task.py holds).
 WAKE_SURFING_REWARD = RewardWeights(slot=1.0, progress=1.0, benefit=10.0, benefit_cap=0.8, box=4.0, box_scale_b=0.1,
                                     effort=0.01, rate=0.05)
+# The test episodes' draws (the evaluation at the task's 0.25 m/s) ...
 WAKE_SURFING_RANDOMISATION = Randomisation(turbulence_sigma_mps=0.25, crosswind_mps=5.0, leader_turn_deg=30.0,
                                            leader_speed_mps=1.0)
+# ... and the training's: the turbulence intensity drawn per episode in [0, 0.5] m/s (the task's 0.25 in the middle,
+# calm air and twice it at the ends) and a 1 m start jitter
+WAKE_SURFING_TRAINING_RANDOMISATION = dataclasses.replace(WAKE_SURFING_RANDOMISATION, turbulence_sigma_mps=0.5,
+                                                          turbulence_sigma_spread=1.0, initial_offset_m=1.0)
 #: the controllers the task is judged against (agents/ and train/ build them by these names); the oracle
 #: set-point ceilings (train.evaluation.wake_surfing_rollout.oracle_policy) are reported beside them, not as baselines
 BASELINES = ("pid", "pid_formation", "extremum_seeking")
 
+_EVAL_PRESET = {"compute_benefit": True, "reward": WAKE_SURFING_REWARD, "randomisation": WAKE_SURFING_RANDOMISATION}
 TASK = register_task(Task(
-    "wake_surfing", SCENARIO, "formation_env/WakeSurfing-v0", 1,
+    "wake_surfing", SCENARIO, "formation_env/WakeSurfing", 1,
     options={"action_mode": "setpoints", "compute_benefit": True, "reward": WAKE_SURFING_REWARD,
-             "randomisation": WAKE_SURFING_RANDOMISATION},
+             "randomisation": WAKE_SURFING_TRAINING_RANDOMISATION},
+    evaluation=EvaluationProtocol(levels=(0.0, 0.25, 1.0), headline_level=0.25, metric="harvest_ratio",
+                                  preset=_EVAL_PRESET),
     baselines=BASELINES, reference="formation_env.tasks.wake_surfing.optimum",
     metrics="formation_env.tasks.wake_surfing.metrics",
     description="move within the safe box to the position of least induced drag"))
@@ -101,13 +109,15 @@ TASK = register_task(Task(
 RANDOM_LEADER_SCENARIO = dataclasses.replace(
     SCENARIO, name="wake_surfing_random_leader",
     description=SCENARIO.description + "; the leader's weight (9.0-13.5 kg) and speed (23-26 m/s) drawn per episode")
-RANDOM_LEADER_RANDOMISATION = dataclasses.replace(WAKE_SURFING_RANDOMISATION, leader_speed_offset_min_mps=-2.0,
-                                                  leader_speed_offset_max_mps=1.0, leader_fuel_offset_min_kg=-1.5,
-                                                  leader_fuel_offset_max_kg=3.0)
+_LEADER_DRAWS = dict(leader_speed_offset_min_mps=-2.0, leader_speed_offset_max_mps=1.0, leader_fuel_offset_min_kg=-1.5,
+                     leader_fuel_offset_max_kg=3.0)
+RANDOM_LEADER_RANDOMISATION = dataclasses.replace(WAKE_SURFING_RANDOMISATION, **_LEADER_DRAWS)
 
 RANDOM_LEADER_TASK = register_task(Task(
-    "wake_surfing_random_leader", RANDOM_LEADER_SCENARIO, "formation_env/WakeSurfingRandomLeader-v0", 1,
-    options={**TASK.options, "randomisation": RANDOM_LEADER_RANDOMISATION},
+    "wake_surfing_random_leader", RANDOM_LEADER_SCENARIO, "formation_env/WakeSurfingRandomLeader", 1,
+    options={**TASK.options,
+             "randomisation": dataclasses.replace(WAKE_SURFING_TRAINING_RANDOMISATION, **_LEADER_DRAWS)},
+    evaluation=dataclasses.replace(TASK.evaluation, preset={**_EVAL_PRESET, "randomisation": RANDOM_LEADER_RANDOMISATION}),
     baselines=BASELINES, reference="formation_env.tasks.wake_surfing.optimum",
     metrics="formation_env.tasks.wake_surfing.metrics",
     description="wake surfing behind a leader whose weight and speed are drawn per episode: find the wake"))
