@@ -1,0 +1,173 @@
+"""The scripts in examples/ run as a researcher runs them: ``python examples/<file>.py --smoke`` in a subprocess,
+from a working directory of their own (PYTHONPATH the repository, as a checkout without installing it).
+
+That working directory holds a user's own ``train.py`` and ``agents/`` package, each raising ImportError when
+imported: an example must never pick up modules from the directory it is run in (the project's ``train`` and
+``agents`` are top-level packages of the same names).
+
+Each test checks the exit status and what the example is there to show (the paired difference an evaluation
+prints, the model a training saves). The recipes written out in the training examples are checked against
+train/hyperparams/ppo.yml and mappo.yml, so the examples cannot drift from the committed recipe.
+"""
+
+from __future__ import annotations
+
+import importlib.util
+import os
+import re
+import subprocess
+import sys
+import tempfile
+from pathlib import Path
+
+import pytest
+
+REPO = Path(__file__).resolve().parents[2]
+EXAMPLES = REPO / "examples"
+_SHADOW = "raise ImportError('a user module in the working directory was imported: {}')\n"
+
+
+@pytest.fixture
+def workdir(tmp_path):
+    """A working directory with a user's own ``train.py`` and ``agents/`` that must never be imported."""
+    (tmp_path / "train.py").write_text(_SHADOW.format("train.py"))
+    (tmp_path / "agents").mkdir()
+    (tmp_path / "agents" / "__init__.py").write_text(_SHADOW.format("agents/"))
+    return tmp_path
+
+
+def run_example(name: str, cwd: Path, *args: str, timeout: float = 300, env: dict | None = None) -> str:
+    env = {**os.environ, "PYTHONPATH": str(REPO), **(env or {})}
+    env.pop("RAY_ADDRESS", None)
+    r = subprocess.run([sys.executable, str(EXAMPLES / name), "--smoke", *args], cwd=cwd, env=env,
+                       capture_output=True, text=True, timeout=timeout)
+    out = r.stdout + r.stderr
+    assert r.returncode == 0, f"{name} --smoke exited {r.returncode}:\n{out[-6000:]}"
+    assert "a user module in the working directory was imported" not in out
+    return out
+
+
+def _module(name: str):
+    spec = importlib.util.spec_from_file_location(f"example_{name}", EXAMPLES / f"{name}.py")
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    return mod
+
+
+def test_every_example_has_a_docstring_and_a_smoke_flag():
+    files = sorted(EXAMPLES.glob("*.py"))
+    assert {f.name for f in files} >= {"quickstart_pettingzoo.py", "train_ppo_close_formation.py",
+                                       "evaluate_committed.py", "mappo_vee5.py", "rllib_vee5.py",
+                                       "torchrl_close_formation.py"}
+    for f in files:
+        text = f.read_text()
+        assert text.startswith('"""'), f"{f.name}: no module docstring"
+        assert f"python examples/{f.name} --smoke" in text and "--smoke" in text, f"{f.name}: docstring says how to run"
+
+
+def test_quickstart_pettingzoo(workdir):
+    out = run_example("quickstart_pettingzoo.py", workdir)
+    assert "agents: ['uav_1']" in out
+    for group in ("slot_position_error", "induced_wind", "neighbours"):
+        assert re.search(rf"^\s+{group}\s+\d+", out, re.M), f"observation group {group} not printed"
+    assert "induced wind (N, E, D)" in out and "induced-drag saving" in out
+    rows = dict(re.findall(r"^(pid|random)\s+20\s+\S+\s+\S+ m\s+(\S+)$", out, re.M))
+    assert set(rows) == {"pid", "random"}, out[-2000:]
+    assert 0.0 < float(rows["pid"]) < 1.0  # the follower starts near the optimum: it harvests part of it
+
+
+def _recipe_matches(mod, algo_section: dict) -> None:
+    kw = dict(mod.PPO_KWARGS)
+    assert mod.REWARD_SCALE == algo_section["reward_scale"]
+    assert mod.N_FORMATIONS == algo_section["n_formations"]
+    assert mod.TOTAL_STEPS == algo_section["n_timesteps"]
+    for key in ("n_steps", "batch_size", "n_epochs", "gamma", "gae_lambda", "clip_range", "ent_coef", "vf_coef",
+                "max_grad_norm"):
+        assert kw[key] == algo_section[key], key
+    lr = algo_section["learning_rate"]
+    if isinstance(lr, str):  # "lin_<initial>": decayed linearly to 0
+        assert kw["learning_rate"](1.0) == pytest.approx(float(lr[4:])) and kw["learning_rate"](0.0) == 0.0
+    else:
+        assert kw["learning_rate"] == lr
+    net = kw.get("policy_kwargs") or mod.NET
+    pk = algo_section["policy_kwargs"]
+    assert net["net_arch"] == pk["net_arch"] and net["log_std_init"] == pk["log_std_init"]
+    assert net["activation_fn"].__name__.lower() == pk["activation_fn"]
+
+
+def test_training_examples_write_out_the_committed_recipes():
+    from train.sb3.config import load_hyperparams
+
+    ppo = load_hyperparams("ppo", "close_formation")
+    _recipe_matches(_module("train_ppo_close_formation"), ppo)
+    assert ppo["action_guard"] is True  # the example's GuardedVecEnv
+    mappo = load_hyperparams("ppo", "vee5", REPO / "train" / "hyperparams" / "mappo.yml")
+    assert mappo["policy"] == "CentralCriticPolicy"
+    _recipe_matches(_module("mappo_vee5"), mappo)
+    assert mappo.get("action_guard") is False  # the example flies without the guard
+
+
+def _paired_line(out: str, metric: str, baseline: str) -> float:
+    m = re.search(rf"^{metric}, \S+ minus {baseline}: ([+-]\d\.\d+) \[([+-]\d\.\d+), ([+-]\d\.\d+)\]", out, re.M)
+    assert m, f"no paired difference against {baseline} printed:\n{out[-3000:]}"
+    d, lo, hi = map(float, m.groups())
+    assert lo <= d <= hi
+    return d
+
+
+def test_train_ppo_close_formation(workdir):
+    out = run_example("train_ppo_close_formation.py", workdir, "--out", "run")
+    assert (workdir / "run" / "model.zip").is_file() and (workdir / "run" / "model.json").is_file()
+    assert re.search(r"trained [\d,]+ steps", out)
+    _paired_line(out, "harvest_ratio", "station_keeper")
+
+
+def test_evaluate_committed(workdir):
+    out = run_example("evaluate_committed.py", workdir)
+    assert "formation_env/CloseFormation-v" in out
+    for baseline in ("pid", "station_keeper"):
+        _paired_line(out, "harvest_ratio", baseline)
+    # the committed policy harvests more than the thesis PID even in 4 short episodes
+    assert _paired_line(out, "harvest_ratio", "pid") > 0
+
+
+def test_mappo_vee5(workdir):
+    out = run_example("mappo_vee5.py", workdir, "--out", "run")
+    assert (workdir / "run" / "model.zip").is_file()
+    assert re.search(r"2 vees x 4 followers, actor input (\d+), critic input (\d+)", out)
+    a, c = map(int, re.search(r"actor input (\d+), critic input (\d+)", out).groups())
+    assert c == 4 * a  # the agent-specific global state: its own observation and the three others'
+    assert re.search(r"^model: formation saving \d\.\d{3}, collisions \d+/2$", out, re.M)
+
+
+def test_torchrl_close_formation(workdir):
+    pytest.importorskip("torchrl")
+    out = run_example("torchrl_close_formation.py", workdir)
+    assert "PettingZooWrapper groups: {'uav': ['uav_1']}" in out
+    assert len(re.findall(r"^\s+(random|pid)\s*: 10 decisions", out, re.M)) == 4
+    assert "GymEnv('formation_env/CloseFormation-v" in out
+
+
+def _ray_processes(tmpdir: str) -> list[int]:
+    """Processes started with RAY_TMPDIR = ``tmpdir`` (every Ray process of the example's instance)."""
+    pids = []
+    for p in Path("/proc").iterdir():
+        if not p.name.isdigit():
+            continue
+        try:
+            if f"RAY_TMPDIR={tmpdir}".encode() in (p / "environ").read_bytes().split(b"\0") \
+                    or tmpdir.encode() in (p / "cmdline").read_bytes():
+                pids.append(int(p.name))
+        except OSError:
+            continue
+    return pids
+
+
+def test_rllib_vee5(workdir):
+    pytest.importorskip("ray.rllib", reason="needs the 'distributed' extra (ray[rllib])")
+    ray_tmp = tempfile.mkdtemp(prefix="fe-ex-ray-", dir="/tmp")  # short: Ray's socket paths must stay short
+    out = run_example("rllib_vee5.py", workdir, "--out", "run", env={"RAY_TMPDIR": ray_tmp}, timeout=400)
+    assert re.search(r"RLlib: 1 iterations, [\d,]+ env steps", out)
+    assert (workdir / "run" / "summary.json").is_file()
+    assert re.search(r"formation saving \d\.\d{3}, collisions \d+/2$", out, re.M)
+    assert not _ray_processes(ray_tmp), "Ray processes left behind"
