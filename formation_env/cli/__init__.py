@@ -16,7 +16,7 @@ import sys
 from ..errors import ClusterUnreachableError, MissingDependencyError
 from ._args import OneLineArgumentParser, check_out_path
 
-COMMANDS = ("verify", "bench", "demo", "trim", "modes", "run", "report", "replay", "train", "evaluate", "warmup", "docs")
+COMMANDS = ("verify", "bench", "demo", "trim", "modes", "run", "report", "replay", "train", "evaluate", "warmup", "docs", "results")
 
 
 def build_parser() -> argparse.ArgumentParser:

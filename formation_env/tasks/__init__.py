@@ -11,12 +11,12 @@ and metrics where it has them, and the names of the baselines it is judged again
 Importing this package registers every task (and its scenario) in order; ``formation_env`` imports it.
 """
 
-from .base import (TASKS, Task, get_task, gym_ids, make_config, register_task, task_for_scenario, task_learning, task_names,
-                   task_options)
+from .base import (HEADLINE_METRICS, TASKS, TEST_SEED_BASE, VALIDATION_SEED_BASE, EvaluationProtocol, Task, get_task,
+                   gym_ids, make_config, register_task, task_for_scenario, task_learning, task_names, task_options)
 from . import thesis  # noqa: F401  (registers)
 from . import close_formation  # noqa: F401
 from . import wake_surfing  # noqa: F401
 from . import close_formations  # noqa: F401
 
-__all__ = ["Task", "TASKS", "get_task", "task_names", "register_task", "task_options", "task_for_scenario", "make_config",
+__all__ = ["Task", "EvaluationProtocol", "HEADLINE_METRICS", "TEST_SEED_BASE", "VALIDATION_SEED_BASE", "TASKS", "get_task", "task_names", "register_task", "task_options", "task_for_scenario", "make_config",
            "gym_ids", "task_learning"]

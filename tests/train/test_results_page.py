@@ -1,0 +1,46 @@
+"""docs/results.md, its marl-eval JSON and the README's task table are exactly what `formation-env results` writes
+from the committed records (no hand-typed result anywhere)."""
+
+from __future__ import annotations
+
+import json
+
+import pytest
+
+pytest.importorskip("rliable")
+
+from train.publish import results_page as rp  # noqa: E402
+
+
+def test_the_generated_files_equal_what_the_records_give():
+    changed = rp.write_results(check=True)
+    assert not changed, f"{[str(p) for p in changed]} differ from the records: run `formation-env results`"
+
+
+def test_every_task_with_records_is_on_the_page_with_its_version():
+    from formation_env.tasks import get_task
+
+    page = rp.PAGE.read_text(encoding="utf-8")
+    for src in rp.RECORDS:
+        task = get_task(src.task)
+        assert f"## {task.name}" in page and f"`{task.gym_id}`" in page
+        assert src.file in page
+
+
+def test_a_changed_record_changes_the_page(tmp_path, monkeypatch):
+    src = rp.RECORDS[0]
+    data = json.loads((rp.POLICIES / src.file).read_text())
+    node = data
+    for key in src.path:
+        node = node[key]
+    name = next(n for n in node if n not in rp.CLASSICAL)
+    col = rp._metric_key(rp._columns(node[name]), "harvest_ratio")
+    node[name][col] = [v * 0.5 for v in node[name][col]]
+    (tmp_path / src.file).write_text(json.dumps(data))
+    monkeypatch.setattr(rp, "POLICIES", tmp_path)
+    changed = rp.collect((src,))
+    monkeypatch.setattr(rp, "POLICIES", rp.REPO / "train" / "policies")
+    original = rp.collect((src,))
+    page_changed, _ = rp.results_markdown(changed)
+    page_original, _ = rp.results_markdown(original)
+    assert page_changed != page_original

@@ -1,0 +1,324 @@
+"""``formation-env results``: docs/results.md and its marl-eval JSON, generated from the committed records.
+
+Every number on the page is computed here from the per-episode columns of the records in ``train/policies/`` (the
+held-out test episodes of each task's evaluation protocol, ``formation_env.tasks.Task.evaluation``): per task and
+turbulence level, every learned policy (its training seeds pooled, one run each) and every classical baseline with
+the task's headline metric as rliable's IQM (or the mean, for a 0/1 success) with its stratified-bootstrap 95 %
+interval (runs and episodes resampled together), the mean, the lateral and vertical RMS slot errors in spans, the
+collisions, and the probability of improvement over the best classical baseline on the same episodes. The record
+each row comes from is named with the sha256 of its bytes, so a changed record changes the page. A test holds the
+committed page equal to what this module writes; nothing on it is typed by hand.
+
+The README's task table (between ``<!-- tasks:start -->`` and ``<!-- tasks:end -->``) is written from the same
+numbers.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import re
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+__all__ = ["RECORDS", "RecordSource", "collect", "results_markdown", "readme_table", "marl_eval_json",
+           "write_results", "PAGE", "MARL_EVAL", "README"]
+
+REPO = Path(__file__).resolve().parents[2]
+POLICIES = REPO / "train" / "policies"
+PAGE = REPO / "docs" / "results.md"
+MARL_EVAL = REPO / "docs" / "results_marl_eval.json"
+README = REPO / "README.md"
+N_BOOT = 2000  # bootstrap resamples per interval: the intervals' own Monte Carlo error is below their last digit
+SPAN_M = 2.9   # formation_env.constants.AEROSONDE_SPAN_M (the unit of the slot errors on the page)
+
+#: the classical controllers (agents/): the baselines a learned policy is compared with
+CLASSICAL = {"pid": "thesis PID", "pid_formation": "PID formation keeper", "station_keeper": "station keeper",
+             "extremum_seeking": "extremum seeker"}
+#: controllers told the optimum's position (ceilings, not baselines)
+CEILINGS = {"oracle_keeper_margin0": "station keeper told the optimum (ceiling)",
+            "oracle_keeper_margin0.05": "station keeper told the optimum, 0.05 b margin (ceiling)"}
+#: record columns of a headline metric where a record names it otherwise
+ALIASES = {"harvest_ratio": ("harvest_ratio", "saving_ratio"), "reconfig_success": ("reconfig_success",),
+           "formation_saving": ("formation_saving",), "rms_slot_error_m": ("rms_slot_error_m",)}
+
+
+@dataclass(frozen=True)
+class RecordSource:
+    """Where a task's episodes at one turbulence level are: ``file`` in train/policies, the ``path`` of keys to a
+    mapping policy -> episodes (a list of episode dicts or a dict of columns)."""
+
+    task: str
+    sigma: float
+    file: str
+    path: tuple
+
+
+def _levels(task: str, file: str, key: str, index: int, sigmas=(1.0, 0.0)) -> list[RecordSource]:
+    return [RecordSource(task, s, file, ("records", key, index, "by_level", f"sigma_{s:g}", "episodes"))
+            for s in sigmas]
+
+
+RECORDS: tuple[RecordSource, ...] = (
+    *[RecordSource("close_formation", s, "close_formation_ppo_setpoints_levels.json", ("by_level", f"sigma_{s:g}", "episodes"))
+      for s in (1.0, 0.0, 0.5, 1.5)],
+    *_levels("echelon3", "echelon3_ppo_setpoints_levels.json", "echelon3", 0, (1.0,)),
+    *_levels("echelon3", "echelon3_ppo_setpoints_levels.json", "echelon3", 1, (0.0,)),
+    *_levels("vee5", "vee5_ppo_setpoints_levels.json", "vee5", 0),
+    *_levels("vee5", "vee5_mappo_setpoints_levels.json", "vee5", 0, (1.0,)),
+    *_levels("vee5", "vee5_mappo_setpoints_levels.json", "vee5", 1, (0.0,)),
+    *_levels("vee9", "vee5_ppo_setpoints_levels.json", "vee9", 0, (1.0,)),
+    *_levels("vee_rotation", "vee_rotation_ppo_setpoints_levels.json", "vee_rotation", 0, (1.0,)),
+    *_levels("vee_rotation", "vee_rotation_ppo_setpoints_levels.json", "vee_rotation", 1, (0.0,)),
+    RecordSource("reconfiguration", 1.0, "reconfiguration_ppo_setpoints_evaluation.json", ("policies",)),
+    RecordSource("formation_keeping", 1.0, "formation_keeping_ppo_setpoints_evaluation.json", ("policies",)),
+    RecordSource("wake_surfing", 0.25, "wake_surfing_ppo_setpoints_evaluation.json", ("controllers",)),
+    *[RecordSource("wake_surfing", s, "wake_surfing_ppo_setpoints_levels.json", ("levels", f"wake_surfing_sigma_{s:g}", "episodes"))
+      for s in (0.0, 1.0)],
+    *[RecordSource("wake_surfing_random_leader", s, "wake_surfing_random_leader_ppo_setpoints_levels.json",
+                   ("levels", f"wake_surfing_random_leader_sigma_{s:g}", "episodes")) for s in (0.25, 0.0, 1.0)],
+)
+
+_ANCHORS = """Physical anchors for the savings: NASA's F/A-18 Autonomous Formation Flight measured about 12 % less
+fuel for the trailing aircraft in flight; C-17 formation flight tests 7-10 %; Airbus's fello'fly more than 5 % per
+trip. The benefit is sharp: a lateral error of a tenth of a span halves it, which is why the slot errors below are
+given in spans."""
+
+
+def _columns(episodes) -> dict[str, np.ndarray]:
+    if isinstance(episodes, dict) and "episodes" in episodes:
+        episodes = episodes["episodes"]
+    if isinstance(episodes, list):
+        keys = episodes[0].keys() if episodes else ()
+        return {k: np.asarray([e.get(k) for e in episodes], dtype=float) for k in keys
+                if all(isinstance(e.get(k), (int, float, bool)) and e.get(k) is not None for e in episodes)}
+    return {k: np.asarray(v, dtype=float) for k, v in episodes.items()
+            if isinstance(v, list) and all(isinstance(x, (int, float, bool)) for x in v)}
+
+
+def _group(name: str) -> str:
+    return re.sub(r"_seed\d+$", "", name)
+
+
+def _label(group: str, task: str) -> str:
+    if group in CLASSICAL:
+        return CLASSICAL[group]
+    if group in CEILINGS:
+        return CEILINGS[group]
+    m = re.match(r"(.+)_(ppo|mappo|sac|td3|recurrent_ppo)_(setpoints|residual|surfaces)$", group)
+    if m is None:
+        return group
+    trained_on, algo = m.group(1), m.group(2)
+    label = {"ppo": "PPO", "mappo": "MAPPO", "sac": "SAC", "td3": "TD3", "recurrent_ppo": "recurrent PPO"}[algo]
+    return label if trained_on == task else f"{label} trained on {trained_on} (transfer)"
+
+
+def _digest(path: Path) -> str:
+    return hashlib.sha256(path.read_bytes()).hexdigest()[:12]
+
+
+def collect(sources=RECORDS) -> dict:
+    """task -> sigma -> {"file", "digest", "runs": {group: {run name: columns}}}."""
+    out: dict = {}
+    for src in sources:
+        path = POLICIES / src.file
+        data = json.loads(path.read_text())
+        for key in src.path:
+            data = data[key]
+        level = out.setdefault(src.task, {}).setdefault(src.sigma, {"files": {}, "runs": {}})
+        level["files"][src.file] = _digest(path)
+        for name, eps in data.items():
+            cols = _columns(eps)
+            if cols:
+                level["runs"].setdefault(_group(name), {})[name] = cols
+    return out
+
+
+def _metric_key(cols: dict, metric: str) -> str | None:
+    return next((k for k in ALIASES[metric] if k in cols), None)
+
+
+def _matrix(runs: dict, key: str) -> np.ndarray | None:
+    rows = [c[key] for _, c in sorted(runs.items()) if key in c]
+    if not rows or len({len(r) for r in rows}) != 1:
+        return None
+    return np.vstack(rows)
+
+
+def _fmt(v, ci=None, digits=3) -> str:
+    if v is None or not np.isfinite(v):
+        return "-"
+    s = f"{v:.{digits}f}"
+    return s if ci is None else f"{s} [{ci[0]:.{digits}f}, {ci[1]:.{digits}f}]"
+
+
+def _level_rows(task, level: dict) -> tuple[list[dict], str | None]:
+    """Rows of one level's table (one per group) and the best classical baseline's group."""
+    from train.evaluation.aggregates import aggregate, probability_of_improvement
+
+    metric = task.evaluation.metric
+    higher = task.evaluation.higher_is_better
+    stat = "mean" if metric == "reconfig_success" else "iqm"
+    rows = []
+    for group, runs in level["runs"].items():
+        any_cols = next(iter(runs.values()))
+        key = _metric_key(any_cols, metric)
+        m = None if key is None else _matrix(runs, key)
+        if m is None:
+            continue
+        agg = aggregate(m, statistics=("iqm", "mean"), n_boot=N_BOOT, seed=0)
+        lat = _matrix(runs, "rms_lateral_m")
+        ver = _matrix(runs, "rms_vertical_m")
+        col = _matrix(runs, "collision")
+        rows.append({"group": group, "label": _label(group, task.name), "runs": m.shape[0], "episodes": m.shape[1],
+                     "matrix": m, "headline": agg[stat], "mean": agg["mean"]["value"],
+                     "lateral_b": None if lat is None else float(np.sqrt(np.mean(lat ** 2)) / SPAN_M),
+                     "vertical_b": None if ver is None else float(np.sqrt(np.mean(ver ** 2)) / SPAN_M),
+                     "collisions": None if col is None else (int(col.sum()), int(col.size))})
+    classical = [r for r in rows if r["group"] in CLASSICAL]
+    best = None
+    if classical:
+        best = (max if higher else min)(classical, key=lambda r: r["headline"]["value"])
+        for r in rows:
+            if r is best or r["group"] in CLASSICAL or r["matrix"].shape[1] != best["matrix"].shape[1]:
+                continue
+            r["poi"] = probability_of_improvement(r["matrix"], best["matrix"], higher_is_better=higher, n_boot=N_BOOT,
+                                                  seed=0)
+    order = {g: i for i, g in enumerate(CLASSICAL)}
+    rows.sort(key=lambda r: (r["group"] in CLASSICAL, r["group"] in CEILINGS, order.get(r["group"], 0), r["group"]))
+    return rows, (best["group"] if best else None)
+
+
+def _table(task, sigma: float, level: dict) -> tuple[str, list[dict], str | None]:
+    from formation_env.tasks import HEADLINE_METRICS
+
+    rows, best = _level_rows(task, level)
+    metric = task.evaluation.metric
+    stat = "mean" if metric == "reconfig_success" else "IQM"
+    lines = [f"| controller | runs x episodes | {HEADLINE_METRICS[metric][0]}: {stat} [95 % CI] | mean | "
+             "lateral RMS, b | vertical RMS, b | collisions | P(better than the best baseline) [95 % CI] |",
+             "|---|---|---|---|---|---|---|---|"]
+    for r in rows:
+        coll = "-" if r["collisions"] is None else f"{r['collisions'][0]} / {r['collisions'][1]}"
+        poi = r.get("poi")
+        name = r["label"] + (" (best baseline)" if r["group"] == best else "")
+        lines.append(f"| {name} | {r['runs']} x {r['episodes']} | {_fmt(r['headline']['value'], r['headline']['ci'])} | "
+                     f"{_fmt(r['mean'])} | {_fmt(r['lateral_b'])} | {_fmt(r['vertical_b'])} | {coll} | "
+                     f"{_fmt(poi['value'], poi['ci'], 2) if poi else '-'} |")
+    return "\n".join(lines), rows, best
+
+
+def results_markdown(data: dict | None = None) -> tuple[str, dict]:
+    """The page's markdown and, per task, the headline rows (for the README table and the marl-eval JSON)."""
+    from formation_env.tasks import HEADLINE_METRICS, get_task
+
+    data = collect() if data is None else data
+    parts = ["# Results", "",
+             "<!-- generated by `formation-env results` from the records in train/policies/; do not edit -->", "",
+             "Every number on this page is computed from the per-episode records committed in `train/policies/`: the "
+             "held-out test episodes of each task's evaluation protocol (seeds from 20,000,000,000 up, never used in "
+             "training or model selection; 100 episodes per level). A learned policy's three training seeds are "
+             "pooled as three runs; a classical baseline is one run. Intervals are stratified bootstrap 95 % "
+             "intervals (runs and episodes resampled together; rliable). The probability of improvement compares "
+             "each controller with the best classical baseline on the same episodes. Slot errors are in spans "
+             f"(b = {SPAN_M} m). The raw data are the records themselves; `results_marl_eval.json` beside this page "
+             "holds the headline metric in marl-eval's format.", "", _ANCHORS, ""]
+    summary = {}
+    for name, levels in data.items():
+        task = get_task(name)
+        ev = task.evaluation
+        parts += [f"## {name}", "",
+                  f"`{task.gym_id}` (task version {task.version}): {task.description}. Headline: "
+                  f"{HEADLINE_METRICS[ev.metric][0]} at sigma {ev.headline_level:g} m/s "
+                  f"({'higher' if ev.higher_is_better else 'lower'} is better).", ""]
+        for sigma in sorted(levels, key=lambda s: (s != ev.headline_level, s)):
+            level = levels[sigma]
+            table, rows, best = _table(task, sigma, level)
+            files = ", ".join(f"`{f}` (sha256 {d})" for f, d in sorted(level["files"].items()))
+            parts += [f"### sigma {sigma:g} m/s", "", f"Records: {files}.", "", table, ""]
+            if sigma == ev.headline_level:
+                summary[name] = {"task": task, "rows": rows, "best": best, "sigma": sigma}
+    return "\n".join(parts).rstrip() + "\n", summary
+
+
+def readme_table(summary: dict) -> str:
+    """The README's task table: every registered id, its agents, what it poses, the best learned and classical
+    headline numbers at the headline level (linked to the results page)."""
+    from formation_env.tasks import HEADLINE_METRICS, TASKS
+
+    lines = ["| id | agents | what it poses | best learned | best classical |", "|---|---|---|---|---|"]
+    for t in TASKS.values():
+        if not t.gym_id:
+            continue
+        sc = t.get_scenario()
+        n = sc.n_vehicles
+        agents = {"followers": f"{n - 1} follower(s) of {n}", "all": f"all {n}"}[t.learning] if n > 1 else "1"
+        learned = classical = "-"
+        s = summary.get(t.name)
+        if s is not None:
+            def cell(r):
+                anchor = t.name.replace("_", "-")
+                return f"[{r['label']} {r['headline']['value']:.3f}](docs/results.md#{anchor})"
+
+            learned_rows = [r for r in s["rows"] if r["group"] not in CLASSICAL and r["group"] not in CEILINGS
+                            and "transfer" not in r["label"]]
+            if learned_rows:
+                key = (max if t.evaluation.higher_is_better else min)
+                learned = cell(key(learned_rows, key=lambda r: r["headline"]["value"]))
+            if s["best"] is not None:
+                classical = cell(next(r for r in s["rows"] if r["group"] == s["best"]))
+            metric = HEADLINE_METRICS[t.evaluation.metric][0].split(" (")[0]
+            learned = f"{learned} ({metric}, sigma {s['sigma']:g})" if learned != "-" else learned
+        lines.append(f"| `{t.gym_id}` | {agents} | {t.description} | {learned} | {classical} |")
+    return "\n".join(lines)
+
+
+def marl_eval_json(summary: dict) -> dict:
+    """The headline metric of every controller in marl-eval's raw-data layout: env -> task -> algorithm -> run ->
+    step -> {metric: [episode values]} (one evaluation step: the final policy)."""
+    out: dict = {"formation_env": {}}
+    for name, s in summary.items():
+        metric = s["task"].evaluation.metric
+        task_entry = out["formation_env"].setdefault(s["task"].gym_id, {})
+        for r in s["rows"]:
+            algo = task_entry.setdefault(r["label"], {})
+            for i, row in enumerate(r["matrix"]):
+                algo[f"{i}"] = {"step_0": {"step_count": 0, metric: [round(float(v), 6) for v in row]},
+                                "absolute_metrics": {metric: [round(float(v), 6) for v in row]}}
+    return out
+
+
+def _replace_readme_table(text: str, table: str) -> str:
+    start, end = "<!-- tasks:start -->", "<!-- tasks:end -->"
+    if start not in text or end not in text:
+        raise ValueError(f"README.md has no {start} ... {end} markers for the task table")
+    head, rest = text.split(start, 1)
+    _, tail = rest.split(end, 1)
+    return f"{head}{start}\n{table}\n{end}{tail}"
+
+
+def render() -> dict[Path, str]:
+    """Every file the command writes and its content."""
+    page, summary = results_markdown()
+    files = {PAGE: page, MARL_EVAL: json.dumps(marl_eval_json(summary), indent=1, sort_keys=True) + "\n"}
+    text = README.read_text(encoding="utf-8") if README.is_file() else ""
+    if "<!-- tasks:start -->" in text:
+        files[README] = _replace_readme_table(text, readme_table(summary))
+    return files
+
+
+def write_results(check: bool = False) -> list[Path]:
+    """Write (or with ``check``, compare) the generated files; returns those that differ (were rewritten)."""
+    changed = []
+    for path, text in render().items():
+        old = path.read_text(encoding="utf-8") if path.is_file() else None
+        if old == text:
+            continue
+        changed.append(path)
+        if not check:
+            tmp = path.with_suffix(path.suffix + ".tmp")
+            tmp.write_text(text, encoding="utf-8")
+            tmp.replace(path)
+    return changed
