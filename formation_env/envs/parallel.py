@@ -15,13 +15,14 @@ non-finite state; truncated at the scenario's duration.
 from __future__ import annotations
 
 import functools
-import math
 
 import numpy as np
 from gymnasium import spaces
 from pettingzoo import ParallelEnv
 
 from ..sim import Simulation
+from ..sim.validation import check_action, check_seed
+from ..sim.validation import clipped_values as _clipped_values
 from ..tasks import make_config
 from .config import EnvConfig
 from .observations import OBS_CLIP, group_sizes, to_dict
@@ -49,41 +50,6 @@ def reset_options(options) -> dict | None:
         raise TypeError(f"unknown reset option(s) {unknown}; valid reset options: {list(RESET_OPTIONS)} (the "
                         "scenario, duration_s and every other EnvConfig option are set when the env is made)")
     return {k: v for k, v in options.items() if k in RESET_OPTIONS} or None
-
-
-def _clipped_values(action) -> list | None:
-    """The common case (a policy's float array of 4 finite values) without the general path's numpy calls: the
-    same float64 values (tolist gives a float16/32 entry's exact value) clipped the same way, as a list; None
-    for anything else (the general check decides)."""
-    if type(action) is np.ndarray and action.dtype.kind == "f" and action.shape == (4,):
-        vals = action.tolist()
-        if all(map(math.isfinite, vals)):
-            return [min(max(v, -1.0), 1.0) for v in vals]
-    return None
-
-
-def check_action(agent: str, action) -> np.ndarray:
-    """One agent's action as 4 finite floats clipped to [-1, 1]; anything else (bool, complex, strings,
-    NaN/inf, another shape) is a ``ValueError`` naming ``agent``."""
-    vals = _clipped_values(action)
-    if vals is not None:
-        return np.array(vals)
-    raw = np.asarray(action)
-    if raw.dtype == bool:
-        raise ValueError(f"action of {agent!r} is boolean; actions must be 4 real numbers in [-1, 1], got {action!r}")
-    if np.iscomplexobj(raw):
-        raise ValueError(f"action of {agent!r} is complex ({raw.dtype}); actions must be real numbers in [-1, 1]")
-    if raw.dtype == object and any(isinstance(x, (bool, np.bool_)) for x in raw.reshape(-1)):
-        raise ValueError(f"action of {agent!r} holds booleans; actions must be 4 real numbers in [-1, 1], got {action!r}")
-    try:
-        a = np.asarray(raw, dtype=float)
-    except (TypeError, ValueError):
-        raise ValueError(f"action of {agent!r} must be 4 real numbers, got {action!r}") from None
-    if a.shape != (4,):
-        raise ValueError(f"action of {agent!r} must have shape (4,), got {a.shape}")
-    if not np.all(np.isfinite(a)):
-        raise ValueError(f"action of {agent!r} contains NaN or inf: {a.tolist()}")
-    return np.clip(a, -1.0, 1.0)  # the Box is [-1, 1]; out-of-range values saturate
 
 
 class FormationParallelEnv(ParallelEnv):
@@ -138,9 +104,8 @@ class FormationParallelEnv(ParallelEnv):
         sim_options = reset_options(options)
         if seed is None:
             seed = int(self._entropy.spawn(1)[0].generate_state(1)[0])
-        elif isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
-            raise ValueError(f"seed must be an int >= 0 or None, got {seed!r}")
         else:
+            seed = check_seed(seed)
             # Gymnasium's convention: a seed also seeds the stream later unseeded resets draw from, so a
             # trainer that seeds only the first reset (RLlib's env runners do) replays exactly.
             self._entropy = np.random.SeedSequence(int(seed))

@@ -27,6 +27,7 @@ from gymnasium.vector import AutoresetMode
 from stable_baselines3.common.vec_env.base_vec_env import VecEnv
 
 from ..sim import Simulation
+from ..sim.validation import MAX_SEED, check_actions, check_count, check_seed
 from .config import EnvConfig
 from .observations import OBS_CLIP
 from ..tasks import make_config
@@ -42,10 +43,7 @@ MAX_FORMATIONS = 65_536
 
 
 def _check_n_formations(n_formations) -> int:
-    if isinstance(n_formations, (bool, np.bool_)) or not isinstance(n_formations, (int, np.integer)) \
-            or not 1 <= n_formations <= MAX_FORMATIONS:
-        raise ValueError(f"n_formations must be an integer in [1, {MAX_FORMATIONS}], got {n_formations!r}")
-    return int(n_formations)
+    return check_count(n_formations, "n_formations", 1, MAX_FORMATIONS)
 
 
 def _check_render_mode(render_mode) -> str | None:
@@ -86,7 +84,7 @@ class BatchedFormations:
         self.agents_per_formation = len(self.agents)
         self.num_envs = self.n_formations * self.agents_per_formation
         self.obs_size = self.sim.obs_size
-        self._seed_stream = np.random.SeedSequence(seed)
+        self._seed_stream = np.random.SeedSequence(check_seed(seed))
         self._pending_seeds: list[int | None] = [None] * self.n_formations
         self.t_start = time.perf_counter()
         self.was_reset = False
@@ -96,9 +94,9 @@ class BatchedFormations:
             self._seed_stream = np.random.SeedSequence()
             self._pending_seeds = [None] * self.n_formations
             return
-        if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)):
-            raise ValueError(f"seed must be an int or None, got {seed!r}")
         a = self.agents_per_formation
+        # formation f's first episode gets seed + f * a, which must stay a seed too
+        seed = check_seed(seed, top=MAX_SEED - (self.n_formations - 1) * a)
         self._seed_stream = np.random.SeedSequence(int(seed))
         self._pending_seeds = [int(seed) + f * a for f in range(self.n_formations)]
 
@@ -122,20 +120,8 @@ class BatchedFormations:
         return obs.reshape(self.num_envs, -1).astype(np.float32)
 
     def validate(self, actions) -> np.ndarray:
-        raw = np.asarray(actions)
-        if raw.dtype == bool:
-            raise ValueError(f"actions are boolean; actions must be real numbers in [-1, 1] of shape ({self.num_envs}, 4)")
-        if np.iscomplexobj(raw):
-            bad = np.nonzero(np.any(np.imag(raw).reshape(len(raw), -1) != 0, axis=1))[0].tolist() if raw.ndim else []
-            raise ValueError(f"actions are complex ({raw.dtype}; env index(es) with an imaginary part: {bad}); "
-                             "actions must be real numbers in [-1, 1]")
-        a = np.asarray(raw, dtype=float)
-        if a.shape != (self.num_envs, 4):
-            raise ValueError(f"actions must have shape ({self.num_envs}, 4), got {a.shape}")
-        if not np.all(np.isfinite(a)):
-            bad = np.nonzero(~np.all(np.isfinite(a), axis=1))[0].tolist()
-            raise ValueError(f"actions of env index(es) {bad} contain NaN or inf")
-        return np.clip(a, -1.0, 1.0)
+        """(num_envs, 4) real, finite actions clipped to [-1, 1] (:func:`formation_env.sim.validation.check_actions`)."""
+        return check_actions(actions, (self.num_envs, 4), rows="env index")
 
     def step(self, actions: np.ndarray):
         """Returns obs (after auto-reset), rewards, terminated, truncated (num_envs,) and, for the

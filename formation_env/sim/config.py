@@ -336,6 +336,9 @@ class EnvConfig:
         roll / 0.5 rad, roll rate (rad/s) and pitch minus the agent's / 0.5 rad (3 values per neighbour, after the
         winds when both are on). Its roll sets the height of its wingtip vortices (+-b/2 sin phi), where the
         agent's saving peaks; no other group carries it.
+    reward, randomisation: a :class:`RewardWeights` / :class:`Randomisation`, or a dict of its options (exactly
+        the instance built from it: the options it leaves out take their defaults; an unknown key is a
+        ``TypeError`` naming it, a bad value a ``ValueError`` naming the option).
     """
 
     scenario: object = "formation_keeping"  # a scenario name or a formation_env.scenarios.Scenario
@@ -361,7 +364,12 @@ class EnvConfig:
 
     def __post_init__(self) -> None:
         from ..scenarios import Scenario, get_scenario, scenario_names
+        from .validation import nested_options
 
+        # the nested options: an instance, or a dict of its options (the same as the instance built from it)
+        object.__setattr__(self, "reward", nested_options("EnvConfig", "reward", RewardWeights, self.reward))
+        object.__setattr__(self, "randomisation", nested_options("EnvConfig", "randomisation", Randomisation,
+                                                                 self.randomisation))
         if not isinstance(self.scenario, Scenario) and (not isinstance(self.scenario, str)
                                                         or self.scenario not in scenario_names()):
             raise ValueError(f"EnvConfig: unknown scenario {self.scenario!r}; available: {scenario_names()}")
@@ -431,10 +439,6 @@ class EnvConfig:
             raise ValueError(f"EnvConfig: compute_benefit must be True or False, got {self.compute_benefit!r}")
         object.__setattr__(self, "compute_benefit", bool(self.compute_benefit))
         object.__setattr__(self, "learning", _learning(self.learning))
-        if not isinstance(self.reward, RewardWeights):
-            raise ValueError(f"EnvConfig: reward must be a RewardWeights, got {type(self.reward).__name__}")
-        if not isinstance(self.randomisation, Randomisation):
-            raise ValueError(f"EnvConfig: randomisation must be a Randomisation, got {type(self.randomisation).__name__}")
 
 
 def _learning(learning):

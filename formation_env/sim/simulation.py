@@ -15,6 +15,17 @@ hidden attributes); :meth:`step` is the compiled decision step (:func:`formation
 caller needs to set (a per-episode steady wind) is a reset option, never a write into the state arrays.
 The arrays :meth:`step` returns are views updated in place by the next call: copy what you keep.
 
+The boundary is checked (:mod:`formation_env.sim.validation`, the same checks the env adapters use): actions
+real, finite and of shape (B, A, 4), clipped to [-1, 1]; seeds None or integers in [0, 2**63 - 1]; formation
+indices distinct and in range; a batch size whose state fits in half the machine's memory. Each bad input is one
+``ValueError`` (``TypeError`` for an unknown option name) saying what is allowed.
+
+After an episode's end: a formation whose last step terminated or truncated it is frozen until it is reset. A
+:meth:`step` leaves its state as it was, returns its last observation again with zero reward (and zero reward
+terms), and holds its ``terminated`` / ``truncated`` flags, so nothing is flown or paid past the end. The vector
+envs reset finished formations within the same call (auto-reset), so they never step a frozen one; a batched
+rollout that steps on until its last formation ends reads the finished ones unchanged.
+
 Shapes: B formations, V UAVs, A agents (the UAVs the actions command; the others fly the thesis PID),
 D the observation size. Units SI, frames NED earth and body (x forward, y starboard, z down).
 """
@@ -46,6 +57,7 @@ from .params import (TURBULENCE_CODES, ActionParams, RewardParams, StepParams, a
                      turbulence_params, wake_arrays)
 from .state import StepOutput, init_output, init_state
 from .step import observe, refresh, step
+from .validation import check_actions, check_batch_size, check_indices, check_seeds
 from .warmup import ensure_warm
 
 __all__ = ["Simulation", "SimOutput", "InfoArrays", "RESET_OPTIONS", "INFO_REWARD_KEYS", "reward_info_key",
@@ -68,6 +80,14 @@ def _trim_cached(airspeed_mps: float, altitude_m: float, fuel_kg: float):
 
 
 _TRIMS: dict = {}
+
+
+def _batch_arrays(state, output) -> list[np.ndarray]:
+    """Every array of ``state`` and ``output`` with the batch axis first (the turbulence fields' too)."""
+    out = []
+    for x in (*state, *output):
+        out.extend(x if isinstance(x, tuple) else (x,))
+    return out
 
 
 class SimOutput(NamedTuple):
@@ -96,7 +116,7 @@ class Simulation:
         if not isinstance(config, EnvConfig):
             raise ValueError(f"Simulation: config must be an EnvConfig, got {type(config).__name__}")
         ensure_warm()  # a cold kernel cache compiles here, with progress on stderr, not silently in the first step
-        if isinstance(batch_size, bool) or not isinstance(batch_size, (int, np.integer)) or batch_size < 1:
+        if isinstance(batch_size, (bool, np.bool_)) or not isinstance(batch_size, (int, np.integer)) or batch_size < 1:
             raise ValueError(f"batch_size must be an integer >= 1, got {batch_size!r}")
         self.config = config
         self.scenario: Scenario = config.scenario if isinstance(config.scenario, Scenario) else get_scenario(config.scenario)
@@ -159,9 +179,15 @@ class Simulation:
             field=turbulence_params(sc, sigma, config.turbulence_field), trim_airspeed_mps=float(sc.airspeed_mps),
             coupling=coupling_arrays(lattice, self.wake_coupling, AEROSONDE), neighbour_count=self.neighbour_count,
             neighbour_wind=self.neighbour_wind, neighbour_attitude=self.neighbour_attitude)
-        self.state = init_state(self.batch_size, v, lattice.n_panels, self.params.field)
         self.obs_size = observation_size(v, self.neighbour_count, self.neighbour_wind, self.neighbour_attitude)
+        # the memory the batch needs, from one formation's arrays, checked before the batch's are allocated
+        one = _batch_arrays(init_state(1, v, lattice.n_panels, self.params.field), init_output(1, v, self.obs_size))
+        check_batch_size(self.batch_size, sum(a.nbytes for a in one) + 2 * v * 4 * 8, scenario=sc.name)
+        self.state = init_state(self.batch_size, v, lattice.n_panels, self.params.field)
         self.output: StepOutput = init_output(self.batch_size, v, self.obs_size)
+        self._per_formation = _batch_arrays(self.state, self.output)  # what a frozen formation keeps (step)
+        self._ended = np.zeros(self.batch_size, dtype=bool)  # episode ended at a step, not reset since: frozen
+        self._any_ended = False
         self.info = InfoArrays(self)
         self._actions = np.zeros((self.batch_size, v, 4))
         self._reset_once = np.zeros(self.batch_size, dtype=bool)
@@ -211,11 +237,11 @@ class Simulation:
         ``options`` (applied to every formation reset): ``steady_wind_ned`` (3,) or (n, 3) m/s NED
         replaces the episode's drawn steady wind (the random draws are made all the same, so the rest of
         the episode is the seed's)."""
-        idx = np.arange(self.batch_size) if indices is None else np.atleast_1d(np.asarray(indices, dtype=np.int64))
-        seeds = [None] * len(idx) if seeds is None else list(seeds)
-        if len(seeds) != len(idx):
-            raise ValueError(f"reset: {len(seeds)} seeds for {len(idx)} formations")
+        idx = check_indices(indices, self.batch_size)
+        seeds = check_seeds(seeds, len(idx))
         wind = self._reset_options(options, len(idx))
+        if not len(idx):  # nothing to reset
+            return self._result()
         sc, rnd, v, s = self.scenario, self.config.randomisation, self.n_vehicles, self.state
         field_seeds, field_scales = [], []
         start = sc.start_position_ned()
@@ -293,6 +319,8 @@ class Simulation:
         o.reward_terms[idx] = 0.0
         o.box_depth_m[idx] = 0.0
         self._reset_once[idx] = True
+        self._ended[idx] = False
+        self._any_ended = bool(self._ended.any())
         return self._result()
 
     def _random_leader(self, i: int, rng, state: np.ndarray) -> None:
@@ -336,18 +364,35 @@ class Simulation:
         return w
 
     def step(self, actions=None) -> SimOutput:
-        """One decision of every formation: ``actions`` (B, A, 4) in [-1, 1] for the agents (validated by the
-        caller: the adapters check shape and finiteness), None for zeros."""
+        """One decision of every formation: ``actions`` (B, A, 4) real numbers for the agents, None for zeros.
+
+        Checked (:func:`~formation_env.sim.validation.check_actions`): the shape exactly (B, A, 4), real numbers
+        (bool, complex, strings refused), NaN or inf a ``ValueError`` naming the formations; values outside
+        [-1, 1] are clipped to it, the action space's rule. A formation whose episode ended is frozen (module
+        docstring): its state, observation and done flags held, its reward 0."""
         if not self._all_reset and not self._reset_once.all():
             raise RuntimeError(f"step() before reset(): formation(s) {np.nonzero(~self._reset_once)[0].tolist()} "
                                "were never reset; call reset() first")
         self._all_reset = True  # (once every formation was reset: the check above costs ~1.5 us a decision)
         if actions is not None:
-            if self._all_agents and actions.shape == self._actions.shape:  # every vehicle an agent: a plain copy
+            actions = check_actions(actions, (self.batch_size, self.n_agents, 4))
+            if self._all_agents:  # every vehicle an agent: a plain copy
                 np.copyto(self._actions, actions, casting="unsafe")  # as an assignment casts
             else:
                 self._actions[:, self.agent_mask] = actions
+        frozen = saved = None
+        if self._any_ended:  # keep the finished formations as they are
+            frozen = np.nonzero(self._ended)[0]
+            saved = [a[frozen] for a in self._per_formation]  # fancy indexing copies
         step(self.params, self.state, self._actions, self.output)
+        o = self.output
+        if frozen is not None:
+            for a, kept in zip(self._per_formation, saved):
+                a[frozen] = kept
+            o.reward[frozen] = 0.0
+            o.reward_terms[frozen] = 0.0
+        np.logical_or(o.terminated, o.truncated, out=self._ended)
+        self._any_ended = bool(self._ended.any())
         return self._result()
 
     def observe(self) -> np.ndarray:

@@ -17,7 +17,7 @@ from formation_env.sim import config as _config
 
 OPTION_RANGES = getattr(_config, "OPTION_RANGES", {})  # (imported so; each test fails on its own without it)
 
-DOCS = Path(__file__).resolve().parents[2] / "docs" / "env.md"
+DOCS = Path(__file__).resolve().parents[2] / "docs" / "environments.md"
 
 
 # ---------------------------------------------------------------- options: types and ranges
