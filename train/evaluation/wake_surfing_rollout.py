@@ -169,9 +169,9 @@ def oracle_keeper(margin_b: float, name: str | None = None) -> OracleKeeper:
 def sb3_surfer(path: str, name: str | None = None):
     from pathlib import Path
 
-    from stable_baselines3 import PPO
+    from .safe_zip import load_sb3_model
 
-    model = PPO.load(path, device="cpu")
+    model = load_sb3_model(path, "ppo")  # nothing in the zip unpickled
     return FunctionPolicy(lambda obs: model.predict(obs, deterministic=True)[0], name=name or Path(path).stem)
 
 

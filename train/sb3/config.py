@@ -384,8 +384,8 @@ def _check_batch_fits(cfg: TrainConfig, env) -> None:
         from formation_env.scenarios import get_scenario
 
         n = get_scenario(cfg.scenario).n_vehicles
-        agents = {"all": n, "followers": n - 1}.get(env.learning, None) if isinstance(env.learning, str) \
-            else len(env.learning)
+        agents = max({"all": n, "followers": n - 1}[env.learning] if isinstance(env.learning, str)
+                     else len(env.learning), 1)  # (a one-UAV scenario's env makes its UAV the agent)
         n_steps = kw.get("n_steps", 2048)
         rollout = n_steps * cfg.n_formations * agents
         if batch > rollout:
