@@ -113,8 +113,8 @@ def _randomisation(r) -> str:
     return ", ".join(items) if items else "none"
 
 
-def task_page(task, notes: dict[str, str]) -> str:
-    """The page of one task (markdown)."""
+def task_page(task, notes: dict[str, str], results: frozenset = frozenset()) -> str:
+    """The page of one task (markdown); ``results``: the task names the results page has a section for."""
     from ..sim.observe import group_sizes
     from ..tasks.base import HEADLINE_METRICS
 
@@ -200,8 +200,12 @@ def task_page(task, notes: dict[str, str]) -> str:
         sec["Baselines"] += ["", f"The published learned policies fly with `{task.guard}`"
                              + (f" ({', '.join(f'`{a}` {_fmt(b)}' for a, b in task.guard_options.items())})"
                                 if task.guard_options else "") + f": {_AGENTS.get(task.guard, '')}."]
-    sec["Results"] += [f"Every baseline and committed policy on this task, with the headline metric and its interval: "
-                       f"[Results](../results.md)."]
+    if task.name in results:
+        sec["Results"] += [f"Every baseline and committed policy on this task, each level, with the headline metric and "
+                           f"its interval: [Results, {task.name}](../results.md#{task.name})."]
+    else:
+        sec["Results"] += ["No policy or baseline record is committed for this task yet: the "
+                           "[Results](../results.md) page lists those that are."]
     title = task.name.replace("_", " ").capitalize()
     out = [HEADER.format(name=task.name) + f"# {title} (`{task.name}`)", ""]
     for s in SECTIONS:
@@ -285,7 +289,10 @@ def render_pages(root: Path) -> dict[Path, str]:
     from ..tasks import TASKS
 
     docs = root / "docs"
-    pages = {docs / "tasks" / f"{name}.md": task_page(t, _notes(docs / "tasks" / "notes" / f"{name}.md", name))
+    res = docs / "results.md"
+    results = frozenset(re.findall(r"(?m)^## ([a-z0-9_]+)\s*$", res.read_text(encoding="utf-8"))) if res.is_file() \
+        else frozenset()
+    pages = {docs / "tasks" / f"{name}.md": task_page(t, _notes(docs / "tasks" / "notes" / f"{name}.md", name), results)
              for name, t in TASKS.items()}
     pages[docs / "tasks" / "index.md"] = tasks_index(TASKS.values())
     env = docs / "environments.md"
