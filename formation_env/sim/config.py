@@ -1,7 +1,7 @@
 """Environment configuration: frozen dataclasses validated on construction (ValueError names the field).
 
 Every numeric option has a type and a physical range, all in one table, :data:`OPTION_RANGES`
-(``"Owner.name" -> (min, max, unit, why)``); docs/env.md's "Option ranges" table is the same table
+(``"Owner.name" -> (min, max, unit, why)``); docs/environments.md's "Option ranges" table is the same table
 (``tests/envs/test_validation.py`` holds them equal). A value outside it is a ``ValueError`` naming the
 option, the value and the range."""
 
@@ -315,7 +315,7 @@ class EnvConfig:
     throttle_max: the flight control's throttle ceiling for every UAV (1, the default: the Aerosonde's full
         throttle). Above 1 the engine's manifold pressure passes ambient and the AeroSim engine map is extrapolated:
         not an aircraft but a counterfactual with more thrust, for measuring what thrust authority limits a
-        controller (docs/close_formation.md, "Ceilings").
+        controller (docs/tasks/close_formation.md, "Known limits and open problems").
     leader_reference: how vehicle 0's reference moves (:data:`LEADER_REFERENCES`): "ground" (the thesis's: at the
         trim speed over the ground at a fixed altitude) or "air" (carried along the track and vertically by the air
         vehicle 0 flies in: a leader that holds its airspeed and flies level in the air mass;

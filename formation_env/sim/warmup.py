@@ -1,7 +1,8 @@
 """Compile the kernels ahead of time, with progress, instead of silently on the first step.
 
 The kernels are numba functions cached on disk (``cache=True``: ``__pycache__`` beside each source file). A
-fresh clone has no cache, so its first simulation step compiles for about 80-90 s on 2 cores. ``make
+fresh clone has no cache, so its first simulation step compiles them: minutes on 2 cores, longer when other
+processes share the cores. ``make
 install`` runs :func:`warm_up` (``formation-env warmup``), so the first run after it is warm; and when a
 :class:`~formation_env.sim.Simulation` is built while the cache is cold (a stamp beside this module, written
 after a complete warm-up of the current sources, is missing or older than a source file), :func:`ensure_warm`
@@ -120,7 +121,7 @@ class _Heartbeat:
     def _beat(self) -> None:
         while not self._stop.wait(self.every_s):
             print(f"  [{self.k}/{self.n}] still compiling, {time.perf_counter() - self._t0:.0f} s "
-                  "(the decision step takes ~80 s on 2 idle cores)", file=self.stream, flush=True)
+                  "(the decision step is the longest stage)", file=self.stream, flush=True)
 
     def __exit__(self, *exc) -> None:
         self._stop.set()
