@@ -87,7 +87,8 @@ def main() -> None:
     path = out / "model.zip"
     model.save(path)
     # the sidecar the policy loader reads (vee5's published policies fly without a guard)
-    sidecar = {"algo": "ppo", "scenario": TASK.scenario_name, "action_mode": TASK.action_mode, "control_hz": 10.0,
+    sidecar = {"algo": "ppo", "task": TASK.name, "task_version": TASK.version, "scenario": TASK.scenario_name,
+               "action_mode": TASK.action_mode, "control_hz": 10.0,
                "num_timesteps": int(model.num_timesteps)}
     path.with_suffix(".json").write_text(json.dumps(sidecar, indent=2) + "\n")
     print(f"saved {path} and {path.with_suffix('.json').name}")

@@ -51,10 +51,11 @@ def main() -> None:
     args = parser.parse_args()
     steps = 20 if args.smoke else None
 
-    # the task's benchmark env; obs_mode="dict" names the observation groups (learning code keeps the flat vector)
-    env = formation_env.parallel_env("close_formation", obs_mode="dict")
+    # the task's benchmark env, the follower the agent (the leader flies the thesis PID on its track; PettingZoo's
+    # default, learning="all", makes every UAV an agent); obs_mode="dict" names the observation groups
+    env = formation_env.parallel_env("close_formation", learning="followers", obs_mode="dict")
     obs, infos = env.reset(seed=0)
-    print(f"agents: {env.agents} (vehicle 0, the leader, flies the thesis PID on its track)")
+    print(f"agents: {env.agents}")
     print(f"action space: {env.action_space(env.agents[0])} ({env.config.action_mode})")
     for agent, groups in obs.items():
         print(f"{agent}'s observation groups:")

@@ -31,13 +31,15 @@ def main() -> None:
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--out", default="runs/example-rllib-vee5", help="the run directory (checkpoints)")
     parser.add_argument("--num-cpus", type=int, default=2, help="CPUs of the local Ray instance")
+    parser.add_argument("--env-runners", type=int, default=None,
+                        help="Ray actors sampling the env (default: 2; with --smoke 0, the driver samples)")
     args = parser.parse_args()
 
     task = get_task("vee5")
     if args.smoke:
-        run = dict(iterations=1, num_env_runners=0, overrides=SMOKE)
-    else:
-        run = dict(num_env_runners=2)  # the n_timesteps of train/hyperparams/rllib_ppo.yml
+        run = dict(iterations=1, num_env_runners=0 if args.env_runners is None else args.env_runners, overrides=SMOKE)
+    else:  # the n_timesteps of train/hyperparams/rllib_ppo.yml
+        run = dict(num_env_runners=2 if args.env_runners is None else args.env_runners)
     summary = train_rllib(scenario=task.scenario_name, seed=args.seed, policies="shared", out_dir=args.out,
                           overwrite=True, num_cpus=args.num_cpus, **run)
     print(f"RLlib: {summary['iterations']} iterations, {summary['env_steps']:,} env steps in {summary['wall_s']} s "

@@ -40,8 +40,8 @@ def main() -> None:
     args = parser.parse_args()
     steps = 10 if args.smoke else 600
 
-    # multi-agent: the PettingZoo parallel env (every UAV that learns under the group "uav")
-    env = PettingZooWrapper(formation_env.parallel_env(TASK.name), use_mask=True)
+    # multi-agent: the PettingZoo parallel env, the benchmark's learners (the followers) under the group "uav"
+    env = PettingZooWrapper(formation_env.parallel_env(TASK.name, learning="followers"), use_mask=True)
     check_env_specs(env, seed=0)
     print(f"PettingZooWrapper groups: {env.group_map}")
     (group,) = env.group_map

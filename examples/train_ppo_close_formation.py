@@ -87,7 +87,8 @@ def main() -> None:
     model.save(path)
     # the sidecar the policy loader reads: SB3 algorithm, action interface, and the guard the policy flies with
     # (the task's: the guard in the training loop plus its lateral clip, as the published policies)
-    sidecar = {"algo": "ppo", "scenario": TASK.scenario_name, "action_mode": TASK.action_mode, "control_hz": 10.0,
+    sidecar = {"algo": "ppo", "task": TASK.name, "task_version": TASK.version, "scenario": TASK.scenario_name,
+               "action_mode": TASK.action_mode, "control_hz": 10.0,
                "action_guard": dict(TASK.guard_options) or True, "num_timesteps": int(model.num_timesteps)}
     path.with_suffix(".json").write_text(json.dumps(sidecar, indent=2) + "\n")
     print(f"saved {path} and {path.with_suffix('.json').name}")

@@ -15,6 +15,7 @@ from __future__ import annotations
 import importlib.util
 import os
 import re
+import shutil
 import subprocess
 import sys
 import tempfile
@@ -163,11 +164,29 @@ def _ray_processes(tmpdir: str) -> list[int]:
     return pids
 
 
-def test_rllib_vee5(workdir):
+def _run_rllib(workdir, *args) -> str:
     pytest.importorskip("ray.rllib", reason="needs the 'distributed' extra (ray[rllib])")
     ray_tmp = tempfile.mkdtemp(prefix="fe-ex-ray-", dir="/tmp")  # short: Ray's socket paths must stay short
-    out = run_example("rllib_vee5.py", workdir, "--out", "run", env={"RAY_TMPDIR": ray_tmp}, timeout=400)
+    try:
+        out = run_example("rllib_vee5.py", workdir, "--out", "run", *args, env={"RAY_TMPDIR": ray_tmp}, timeout=400)
+    finally:
+        left = _ray_processes(ray_tmp)
+        shutil.rmtree(ray_tmp, ignore_errors=True)
+    assert not left, f"Ray processes left behind: {left}"
+    return out
+
+
+def test_rllib_vee5(workdir):
+    out = _run_rllib(workdir)
     assert re.search(r"RLlib: 1 iterations, [\d,]+ env steps", out)
     assert (workdir / "run" / "summary.json").is_file()
     assert re.search(r"formation saving \d\.\d{3}, collisions \d+/2$", out, re.M)
-    assert not _ray_processes(ray_tmp), "Ray processes left behind"
+
+
+@pytest.mark.xfail(strict=True, raises=AssertionError, reason=(
+    "Ray puts the driver's working directory on its workers' sys.path, so an env runner unpickling the env "
+    "(train.rllib.env.FormationMultiAgentEnv) imports the user's train.py instead of the project's train package "
+    "(the packaging issue: top-level package names 'train' and 'agents')"))
+def test_rllib_vee5_env_runners_ignore_the_users_train_py(workdir):
+    out = _run_rllib(workdir, "--env-runners", "1")
+    assert re.search(r"RLlib: 1 iterations, [\d,]+ env steps", out)
