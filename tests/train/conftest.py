@@ -132,13 +132,34 @@ class RayProcesses:
     def left(self) -> list[str]:
         return [f"{pid}: {cmd}" for pid, (_, cmd) in self.find().items()]
 
-    def assert_none_left(self, timeout_s: float = 20.0) -> None:
+    def assert_none_left(self, timeout_s: float = 600.0) -> None:
+        """Waits, by pid, for every process of this test's Ray (found by its temp dir: the ones the test's own
+        commands started) to exit. The test process is their subreaper (:func:`become_subreaper`, set by the
+        fixture), so the Ray processes its finished commands leave are its children and are reaped with
+        ``waitpid``; one that is not (no subreaper support) is watched through /proc. There is no fixed
+        deadline for how fast a loaded machine winds Ray down: only a process still running after ``timeout_s``
+        (10 min: a hang, not slowness) fails the test, and it is stopped first."""
+        import os
         import time
 
-        deadline = time.time() + timeout_s  # raylet/GCS exit asynchronously after ray.shutdown()
-        while (left := self.left()) and time.time() < deadline:
-            time.sleep(0.5)
-        assert not left, f"Ray processes left running: {left}"
+        deadline = time.monotonic() + timeout_s
+        while (procs := self.find()) and time.monotonic() < deadline:
+            for pid in procs:
+                while time.monotonic() < deadline and self.alive({pid: procs[pid]}):
+                    try:
+                        if os.waitpid(pid, os.WNOHANG)[0] == pid:  # our child (subreaper): reaped
+                            break
+                    except ChildProcessError:  # not our child: its /proc entry says when it is gone
+                        pass
+                    time.sleep(0.1)
+                try:
+                    os.waitpid(pid, os.WNOHANG)  # reap it if it became a zombie of ours
+                except ChildProcessError:
+                    pass
+        left = self.left()
+        if left:
+            self.stop()
+        assert not left, f"Ray processes still running {timeout_s:.0f} s after the test's commands ended: {left}"
 
     def stop(self, grace_s: float = 30.0) -> dict:
         """Stop this Ray's processes (and only them) in ``ray stop``'s order: the raylets, then the
@@ -177,8 +198,24 @@ class RayProcesses:
 
 @pytest.fixture
 def ray_processes(ray_tmpdir):
-    """:class:`RayProcesses` of the test's Ray temp dir."""
+    """:class:`RayProcesses` of the test's Ray temp dir (this process made the subreaper of what it starts)."""
+    become_subreaper()
     return RayProcesses(ray_tmpdir)
+
+
+def become_subreaper() -> bool:
+    """Makes this process the subreaper of its descendants (Linux ``PR_SET_CHILD_SUBREAPER``): a process whose
+    parent exits (the Ray daemons and workers a finished command leaves) is re-parented here, not to init, so the
+    test can wait on it by pid. False where the OS has no such call."""
+    import ctypes
+    import sys
+
+    if not sys.platform.startswith("linux"):
+        return False
+    try:
+        return ctypes.CDLL(None, use_errno=True).prctl(36, 1, 0, 0, 0) == 0  # PR_SET_CHILD_SUBREAPER
+    except (OSError, AttributeError):
+        return False
 
 
 @pytest.fixture(scope="session")
