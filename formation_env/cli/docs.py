@@ -252,6 +252,7 @@ def _docstring_fields(cls) -> dict[str, str]:
     for names, v in out.items():
         for old, new in _OLD_DOCS.items():
             v = v.replace(old, new)
+        v = re.sub(r":[a-z]+:`~?([^`]+)`", r"`\1`", v).replace("``", "`")
         for n in names.split(", "):
             text[n] = " ".join(v.split()).replace("|", "\\|")
     return text
@@ -269,8 +270,10 @@ def options_block() -> str:
     doc = _docstring_fields(EnvConfig)
     for f in dataclasses.fields(EnvConfig):
         default = f.default if f.default is not dataclasses.MISSING else f.default_factory()
-        meaning = doc.get(f.name, {"reward": "the reward's weights, `RewardWeights` ([Reward terms](#reward-terms))",
-                                   "randomisation": "the per-episode draws, `Randomisation` (below)"}.get(f.name, ""))
+        meaning = {"reward": "the reward's weights: a `RewardWeights` or a dict of its fields "
+                             "([Reward terms](#reward-terms))",
+                   "randomisation": "the per-episode draws: a `Randomisation` or a dict of its fields (below)"}.get(
+            f.name, doc.get(f.name, ""))
         rows.append(f"| `{f.name}` | {_fmt(default)} | {meaning} |")
     rows += ["", "### Randomisation (`Randomisation`)", "", "| field | meaning |", "|---|---|"]
     rdoc = _docstring_fields(Randomisation)
