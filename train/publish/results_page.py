@@ -79,8 +79,9 @@ RECORDS: tuple[RecordSource, ...] = (
     RecordSource("wake_surfing", 0.25, "wake_surfing_ppo_setpoints_evaluation.json", ("controllers",)),
     *[RecordSource("wake_surfing", s, "wake_surfing_ppo_setpoints_levels.json", ("levels", f"wake_surfing_sigma_{s:g}", "episodes"))
       for s in (0.0, 1.0)],
-    *[RecordSource("wake_surfing_random_leader", s, "wake_surfing_random_leader_ppo_setpoints_levels.json",
-                   ("levels", f"wake_surfing_random_leader_sigma_{s:g}", "episodes")) for s in (0.25, 0.0, 1.0)],
+    *[RecordSource("wake_surfing_random_leader", s, f, ("levels", f"wake_surfing_random_leader_sigma_{s:g}", "episodes"))
+      for s in (0.25, 0.0, 1.0)
+      for f in ("wake_surfing_random_leader_ppo_setpoints_levels.json", "wake_surfing_ppo_setpoints_levels.json")],
 )
 
 _ANCHORS = """Physical anchors for the savings: NASA's F/A-18 Autonomous Formation Flight measured about 12 % less
@@ -261,7 +262,7 @@ def readme_table(summary: dict) -> str:
         s = summary.get(t.name)
         if s is not None:
             def cell(r):
-                anchor = t.name.replace("_", "-")
+                anchor = t.name
                 return f"[{r['label']} {r['headline']['value']:.3f}](docs/results.md#{anchor})"
 
             learned_rows = [r for r in s["rows"] if r["group"] not in CLASSICAL and r["group"] not in CEILINGS
