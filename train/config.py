@@ -128,12 +128,12 @@ def env_config_for(scenario: str, action_mode: str, env_kwargs: dict, **override
         for name, value, cls in (("randomisation", rnd, Randomisation), ("reward", rew, RewardWeights)):
             if not isinstance(value, (dict, cls)):
                 raise ValueError(f"env_kwargs.{name} must be a mapping of {cls.__name__} fields, got {value!r}")
-        if not isinstance(rnd, Randomisation):
-            rnd = Randomisation(**rnd)
-        if not isinstance(rew, RewardWeights):
-            rew = RewardWeights(**rew)
+        from formation_env.sim.validation import nested_options  # an unknown key named, with the valid ones
+
+        rnd = nested_options("env_kwargs", "randomisation", Randomisation, rnd)
+        rew = nested_options("env_kwargs", "reward", RewardWeights, rew)
     except TypeError as exc:
-        raise ValueError(f"env_kwargs: {exc}") from None
+        raise ValueError(str(exc) if str(exc).startswith("env_kwargs") else f"env_kwargs: {exc}") from None
     learning = kw.pop("learning", None)
     if learning is None:  # the task's own (vee_rotation: every UAV), else the followers
         from formation_env.tasks import task_learning

@@ -104,7 +104,9 @@ class FormationGymEnv(gym.Env):
         self.episode_decisions = _episode_decisions(cfg)
 
     def reset(self, *, seed: int | None = None, options: dict | None = None):
-        super().reset(seed=seed)
+        from ..sim.validation import check_seed
+
+        super().reset(seed=check_seed(seed))  # a bad seed: the engine's ValueError, not Gymnasium's own error
         if seed is None:
             seed = int(self.np_random.integers(2**63 - 1))
         obs, infos = self._par.reset(seed=seed, options=options)

@@ -44,9 +44,19 @@ def _as_array(values, what: str, expected: str) -> np.ndarray:
         raise ValueError(f"{what} must be real numbers in [-1, 1] of shape {expected}, got {values!r:.200}") from None
 
 
-def _real(raw: np.ndarray, what: str, expected: str, rows: str) -> np.ndarray:
-    """``raw`` as float64, or the error saying why it is not real numbers (bool, complex, strings, objects)."""
+def _holds_bool(values) -> bool:
+    """A (nested) list or tuple with a bool among its numbers (numpy would read True as 1)."""
+    if isinstance(values, (list, tuple)):
+        return any(isinstance(x, (bool, np.bool_)) or _holds_bool(x) for x in values)
+    return False
+
+
+def _real(raw: np.ndarray, what: str, expected: str, rows: str, given=None) -> np.ndarray:
+    """``raw`` (numpy's array of ``given``) as float64, or the error saying why it is not real numbers (bool,
+    complex, strings, objects)."""
     kind = raw.dtype.kind
+    if kind in "iuf" and _holds_bool(given):
+        raise ValueError(f"{what} hold booleans; actions must be real numbers in [-1, 1] of shape {expected}")
     if kind == "b":
         raise ValueError(f"{what} are boolean; actions must be real numbers in [-1, 1] of shape {expected}")
     if kind == "c":
@@ -78,7 +88,7 @@ def check_actions(actions, shape: tuple[int, ...], *, what: str = "actions", row
         if actions.min() >= -1.0 and actions.max() <= 1.0:
             return actions
     expected = str(shape)
-    a = _real(_as_array(actions, what, expected), what, expected, rows)
+    a = _real(_as_array(actions, what, expected), what, expected, rows, actions)
     if a.shape != shape:
         raise ValueError(f"{what} must have shape {shape}, got {a.shape}")
     finite = np.isfinite(a)
@@ -108,7 +118,7 @@ def check_action(agent: str, action) -> np.ndarray:
     what = f"action of {agent!r}"
     try:
         raw = np.asarray(action)
-        a = _real(raw, what, "(4,)", "row")
+        a = _real(raw, what, "(4,)", "row", action)
     except ValueError as exc:
         if "boolean" in str(exc) or "booleans" in str(exc):
             raise ValueError(f"{what} is boolean; actions must be 4 real numbers in [-1, 1], got {action!r}") from None

@@ -37,7 +37,8 @@ def test_step_refuses_non_finite_actions_naming_the_formation(sim, value, match)
     ("abc", "real numbers"), (np.zeros((2, 2, 3)), r"shape \(2, 2, 4\)"), (np.zeros((2, 4)), "shape"),
     (np.zeros((2, 2, 4), dtype=bool), "boolean"), (np.zeros((2, 2, 4), dtype=complex), "complex"),
     ([[["0", 0, 0, 0]] * 2, [[0, 0, 0, 0]] * 2], "real numbers"), ([[[None] * 4] * 2, [[0] * 4] * 2], "real numbers"),
-    ([[[0, 0]], [[0, 0, 0, 0]]], "real numbers|shape"), (np.array([{}]), "real numbers")])
+    ([[[0, 0]], [[0, 0, 0, 0]]], "real numbers|shape"), (np.array([{}]), "real numbers"),
+    ([[[0, True, 0, 0]] * 2] * 2, "booleans")])
 def test_step_refuses_actions_that_are_not_real_numbers_of_the_shape(sim, bad, match):
     assert sim.n_agents == 2
     with pytest.raises(ValueError, match=match):
@@ -175,6 +176,17 @@ def test_a_frozen_formation_leaves_the_others_as_they_would_fly_alone():
     assert out.truncated.tolist() == [True, True]
     assert np.array_equal(out.reward[1], ref.reward[0]) and np.array_equal(out.observation[1], ref.observation[0])
     assert np.all(out.reward[0] == 0.0)
+
+
+def test_a_list_with_a_bool_among_numbers_is_refused_by_every_adapter():
+    par = formation_env.parallel_env("close_formation")
+    par.reset(seed=0)
+    with pytest.raises(ValueError, match="uav_1.*boolean"):
+        par.step({"uav_0": np.zeros(4), "uav_1": [0, True, 0, 0]})
+    venv = FormationVecEnv(1, scenario="close_formation")
+    venv.reset()
+    with pytest.raises(ValueError, match="booleans"):
+        venv.step([[0, 0, 0, 0], [0, 0, np.True_, 0]])
 
 
 def test_after_the_end_in_each_adapter():
