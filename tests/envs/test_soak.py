@@ -75,8 +75,8 @@ def soak(task: str, n_formations: int, decisions: int, *, seed: int = 0, seconds
          detailed_every: int = 50) -> dict:
     """Step ``task``'s vector env ``decisions`` times (or until ``seconds`` of this process's CPU time pass); returns
     the figures and raises
-    AssertionError at the first non-finite value. Memory: resident size after the first fifth of the decisions
-    (warm-up) and at the end."""
+    AssertionError at the first non-finite value. Memory: resident size after the first fifth of the decisions (or
+    of the CPU time) as the warm-up, and at the end."""
     venv = FormationVecEnv(n_formations, scenario=task, seed=seed, detailed_infos=False)
     rng = np.random.default_rng(seed)
     obs = venv.reset()
@@ -104,9 +104,10 @@ def soak(task: str, n_formations: int, decisions: int, *, seed: int = 0, seconds
                 for key, v in info.items():
                     if isinstance(v, (float, np.ndarray)) and not _finite(key, v, venv.batch.sim.n_vehicles == 1):
                         raise AssertionError(f"{task}: non-finite info {key!r} at decision {k}")
-        if k + 1 == warm:
+        used = time.process_time() - c0
+        if not rss_warm and (k + 1 == warm if seconds is None else used > seconds / 5):  # the warm-up's end
             rss_warm = rss_bytes()
-        if seconds is not None and time.process_time() - c0 > seconds and k + 1 > warm:
+        if seconds is not None and used > seconds and rss_warm:
             break
     rss_end = rss_bytes()
     wall, cpu = time.perf_counter() - t0, time.process_time() - c0
