@@ -7,7 +7,7 @@ training never draws) as the task's evaluation protocol poses them: 100 episodes
 sigma 1 m/s, the induced-drag saving computed. The evaluation pairs the policies episode by episode and reports
 95 % bootstrap intervals; the headline is the harvest ratio (the saving flown over the task's optimum).
 
-    python examples/evaluate_committed.py            # the task's protocol: 100 episodes (about two minutes)
+    python examples/evaluate_committed.py            # the task's protocol: 100 episodes per policy
     python examples/evaluate_committed.py --smoke    # 4 episodes of 10 s
 
 The command-line equivalent: ``formation-env evaluate --scenario close_formation --benefit --policy

@@ -11,10 +11,10 @@ flown against the station keeper on held-out episodes (the task's headline: the 
     python examples/mappo_vee5.py            # the recipe's 4M steps, then 100 test episodes
     python examples/mappo_vee5.py --smoke    # 2,048 steps, then 2 short test episodes
 
-The full run is the committed recipe's budget: the committed MAPPO seeds took 3,180-3,446 s (53-57 min) each
-(their records' ``wall_s``, train/policies/vee5_mappo_setpoints_seed*.json, two to three runs at a time on the
-2-core machine). ``formation-env train --scenario vee5 --algo ppo --config train/hyperparams/mappo.yml`` runs the
-same recipe with validation-based model selection: the committed policies were made with it.
+The full run is the committed recipe's budget (how long the committed runs took: ``wall_s`` in their records,
+train/policies/vee5_mappo_setpoints_seed*.json). ``formation-env train --scenario vee5 --algo ppo --config
+train/hyperparams/mappo.yml`` runs the same recipe (its final model is this script's, bit for bit) with
+validation-based model selection: the committed policies were made with it.
 """
 
 import argparse
@@ -101,7 +101,8 @@ def main() -> None:
     print(report["table_markdown"])
     for name in ("model", "station_keeper"):
         s = report["policies"][name]["summary"]
-        print(f"{name}: formation saving {s['formation_saving']:.3f}, collisions {s['collisions']}/{len(report['seeds'])}")
+        print(f"{name}: formation saving {s['formation_saving']:.3f}, "
+              f"collisions {s['collisions']}/{len(report['seeds'])}")
 
 
 if __name__ == "__main__":

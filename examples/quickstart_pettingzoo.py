@@ -18,7 +18,7 @@ import numpy as np
 import formation_env
 
 
-def fly(env, controller: str, steps: int | None, seed: int = 0, verbose: bool = True) -> dict:
+def fly(env, controller: str, steps: int | None, seed: int = 0) -> dict:
     """One episode (or its first ``steps`` decisions) of ``env`` flown by ``controller`` ("pid" or "random")."""
     obs, infos = env.reset(seed=seed)
     for space in map(env.action_space, env.agents):
@@ -35,7 +35,7 @@ def fly(env, controller: str, steps: int | None, seed: int = 0, verbose: bool = 
             rewards.append(reward[agent])
             savings.append(infos[agent]["induced_drag_saving"])
             slot_errors.append(infos[agent]["slot_error_m"])
-            if verbose and (n <= 3 or n % 100 == 0):
+            if n <= 3 or n % 100 == 0:  # the first decisions, then every 10 s
                 wind = infos[agent]["induced_wind_ned_mps"]
                 print(f"  t = {infos[agent]['time_s']:5.1f} s  {agent}: reward {reward[agent]:+8.3f}, slot error "
                       f"{infos[agent]['slot_error_m']:5.2f} m, induced wind (N, E, D) "
@@ -51,8 +51,8 @@ def main() -> None:
     args = parser.parse_args()
     steps = 20 if args.smoke else None
 
-    # the task's benchmark env, the follower the agent (the leader flies the thesis PID on its track; PettingZoo's
-    # default, learning="all", makes every UAV an agent); obs_mode="dict" names the observation groups
+    # the task's benchmark env with the benchmark's learners (the follower; the leader flies the thesis PID on its
+    # track); obs_mode="dict" names the observation groups (learning code keeps the flat vector)
     env = formation_env.parallel_env("close_formation", learning="followers", obs_mode="dict")
     obs, infos = env.reset(seed=0)
     print(f"agents: {env.agents}")

@@ -9,9 +9,8 @@ last checkpoint is then flown against the station keeper on held-out episodes.
     python examples/rllib_vee5.py            # train/hyperparams/rllib_ppo.yml's 1M env steps, 2 env runners
     python examples/rllib_vee5.py --smoke    # one tiny iteration, sampled in the driver
 
-Needs the ``distributed`` extra (``pip install -e ".[distributed]"``: ray[rllib]). The full run's time is not
-recorded: no RLlib policy is committed for vee5. ``formation-env train --backend rllib --scenario vee5`` is the
-command-line equivalent; ``--address`` runs it on an existing Ray cluster.
+Needs the ``distributed`` extra (``pip install -e ".[distributed]"``: ray[rllib]). ``formation-env train --backend
+rllib --scenario vee5`` is the command-line equivalent; ``--address`` runs it on an existing Ray cluster.
 """
 
 import argparse
@@ -53,7 +52,8 @@ def main() -> None:
     print(report["table_markdown"])
     for name, result in report["policies"].items():
         s = result["summary"]
-        print(f"{name}: formation saving {s['formation_saving']:.3f}, collisions {s['collisions']}/{len(report['seeds'])}")
+        print(f"{name}: formation saving {s['formation_saving']:.3f}, "
+              f"collisions {s['collisions']}/{len(report['seeds'])}")
 
 
 if __name__ == "__main__":

@@ -10,11 +10,10 @@ thesis PID and the station keeper on the same held-out episodes (the project's e
     python examples/train_ppo_close_formation.py            # the recipe's 2.2M steps, then 100 test episodes
     python examples/train_ppo_close_formation.py --smoke    # 2,048 steps, then 4 short test episodes
 
-The full run is the committed recipe's budget: the committed seeds took 762-886 s of training each (their records'
-``wall_s``, train/policies/close_formation_ppo_setpoints_seed*.json: two runs at a time on the 2-core machine), and
-the 100-episode evaluation about two minutes more. ``formation-env train --scenario close_formation --algo ppo``
-runs the same recipe with validation-based model selection, checkpoints and learning curves: the committed
-policies were made with it.
+The full run is the committed recipe's budget (how long the committed runs took: ``wall_s`` in their records,
+train/policies/close_formation_ppo_setpoints_seed*.json). ``formation-env train --scenario close_formation --algo
+ppo`` runs the same recipe (its final model is this script's, bit for bit) with validation-based model selection,
+checkpoints and learning curves: the committed policies were made with it.
 """
 
 import argparse

@@ -7,7 +7,8 @@ imported: an example must never pick up modules from the directory it is run in 
 
 Each test checks the exit status and what the example is there to show (the paired difference an evaluation
 prints, the model a training saves). The recipes written out in the training examples are checked against
-train/hyperparams/ppo.yml and mappo.yml, so the examples cannot drift from the committed recipe.
+train/hyperparams/ppo.yml and mappo.yml, and each training example's smoke model against the final model of
+``formation-env train`` at the same sizes (bit for bit), so the examples cannot drift from the committed recipe.
 """
 
 from __future__ import annotations
@@ -38,13 +39,21 @@ def workdir(tmp_path):
 
 
 def run_example(name: str, cwd: Path, *args: str, timeout: float = 300, env: dict | None = None) -> str:
+    """``python examples/<name> --smoke ARGS`` run from ``cwd``; its output. Importing the working directory's
+    ``train.py`` or ``agents/`` is an AssertionError (what the strict xfails below expect), any other failure
+    ``pytest.fail``."""
     env = {**os.environ, "PYTHONPATH": str(REPO), **(env or {})}
     env.pop("RAY_ADDRESS", None)
     r = subprocess.run([sys.executable, str(EXAMPLES / name), "--smoke", *args], cwd=cwd, env=env,
                        capture_output=True, text=True, timeout=timeout)
+    return _checked(r, name)
+
+
+def _checked(r: subprocess.CompletedProcess, name: str) -> str:
     out = r.stdout + r.stderr
-    assert r.returncode == 0, f"{name} --smoke exited {r.returncode}:\n{out[-6000:]}"
-    assert "a user module in the working directory was imported" not in out
+    assert "a user module in the working directory was imported" not in out, f"{name}:\n{out[-3000:]}"
+    if r.returncode != 0:
+        pytest.fail(f"{name} exited {r.returncode}:\n{out[-6000:]}")
     return out
 
 
@@ -57,7 +66,7 @@ def test_an_example_copied_next_to_the_users_train_py_imports_the_project(workdi
     env = {**os.environ, "PYTHONPATH": str(REPO)}
     r = subprocess.run([sys.executable, "train_ppo_close_formation.py", "--help"], cwd=workdir, env=env,
                        capture_output=True, text=True, timeout=120)
-    assert r.returncode == 0 and "--smoke" in r.stdout, (r.stdout + r.stderr)[-2000:]
+    assert "--smoke" in _checked(r, "a copied train_ppo_close_formation.py")
 
 
 def _module(name: str):
@@ -111,6 +120,9 @@ def _recipe_matches(mod, algo_section: dict) -> None:
 def test_training_examples_write_out_the_committed_recipes():
     from train.sb3.config import load_hyperparams
 
+    from formation_env.tasks import get_task
+    from train.sb3.config import TrainConfig, make_env_config
+
     ppo = load_hyperparams("ppo", "close_formation")
     _recipe_matches(_module("train_ppo_close_formation"), ppo)
     assert ppo["action_guard"] is True  # the example's GuardedVecEnv
@@ -118,6 +130,9 @@ def test_training_examples_write_out_the_committed_recipes():
     assert mappo["policy"] == "CentralCriticPolicy"
     _recipe_matches(_module("mappo_vee5"), mappo)
     assert mappo.get("action_guard") is False  # the example flies without the guard
+    for scenario, params in (("close_formation", ppo), ("vee5", mappo)):  # the examples' env: the CLI's
+        cfg = TrainConfig.from_hyperparams(params, scenario=scenario, algo="ppo", action_mode="setpoints", seed=0)
+        assert make_env_config(cfg) == get_task(scenario).default_config()
 
 
 def _paired_line(out: str, metric: str, baseline: str) -> float:
@@ -128,11 +143,31 @@ def _paired_line(out: str, metric: str, baseline: str) -> float:
     return d
 
 
-def test_train_ppo_close_formation(workdir):
+def _same_as_the_cli_run(model_zip: Path, tmp: Path, scenario: str, smoke: dict, config_file=None) -> None:
+    """The example's model is bit for bit the final model of ``formation-env train`` with the same sizes."""
+    import torch
+    from stable_baselines3 import PPO
+
+    from train.sb3.train import train
+
+    train(scenario=scenario, algo="ppo", seed=0, steps=2048, out_dir=tmp, config_file=config_file,
+          overrides={**smoke, "eval_freq": 0, "checkpoint_freq": 0}, log=lambda m: None, progress_bar=False)
+    cli = PPO.load(tmp / "final_model.zip", device="cpu").policy.state_dict()
+    example = PPO.load(model_zip, device="cpu").policy.state_dict()
+    assert cli.keys() == example.keys()
+    assert all(torch.equal(cli[k], example[k]) for k in cli), "the example trains another policy than the CLI"
+
+
+def test_train_ppo_close_formation(workdir, tmp_path_factory):
     out = run_example("train_ppo_close_formation.py", workdir, "--out", "run")
-    assert (workdir / "run" / "model.zip").is_file() and (workdir / "run" / "model.json").is_file()
-    assert re.search(r"trained [\d,]+ steps", out)
-    _paired_line(out, "harvest_ratio", "station_keeper")
+    model = workdir / "run" / "model.zip"
+    assert model.is_file() and (workdir / "run" / "model.json").is_file()
+    assert re.search(r"trained 2,048 steps", out)
+    assert "UserWarning" not in out  # the sidecar records the task's version
+    for baseline in ("pid", "station_keeper"):
+        _paired_line(out, "harvest_ratio", baseline)
+    _same_as_the_cli_run(model, tmp_path_factory.mktemp("cli"), "close_formation",
+                         {"n_formations": 4, "batch_size": 128})
 
 
 def test_evaluate_committed(workdir):
@@ -144,13 +179,15 @@ def test_evaluate_committed(workdir):
     assert _paired_line(out, "harvest_ratio", "pid") > 0
 
 
-def test_mappo_vee5(workdir):
+def test_mappo_vee5(workdir, tmp_path_factory):
     out = run_example("mappo_vee5.py", workdir, "--out", "run")
     assert (workdir / "run" / "model.zip").is_file()
     assert re.search(r"2 vees x 4 followers, actor input (\d+), critic input (\d+)", out)
     a, c = map(int, re.search(r"actor input (\d+), critic input (\d+)", out).groups())
     assert c == 4 * a  # the agent-specific global state: its own observation and the three others'
     assert re.search(r"^model: formation saving \d\.\d{3}, collisions \d+/2$", out, re.M)
+    _same_as_the_cli_run(workdir / "run" / "model.zip", tmp_path_factory.mktemp("cli"), "vee5",
+                         {"n_formations": 2, "batch_size": 128}, REPO / "train" / "hyperparams" / "mappo.yml")
 
 
 def test_torchrl_close_formation(workdir):
