@@ -86,3 +86,43 @@ def test_committed_policies_trained_on_the_benchmark(path):
     assert env_departures(cfg["scenario"], cfg["env_kwargs"]) == {}
     trained = env_config_for(cfg["scenario"], cfg["action_mode"], cfg["env_kwargs"])
     assert trained == task.default_config(learning=trained.learning, obs_mode="flat")
+
+
+@pytest.mark.parametrize("name", ["close_formation", "formation_keeping", "vee5", "wake_surfing"])
+def test_train_with_no_flags_trains_the_benchmark(name):
+    """`formation-env train --scenario NAME --algo ppo` (no other flag): the task's action mode and environment."""
+    from train.sb3.config import TrainConfig, load_hyperparams, make_env_config
+    from train.sb3.train import default_action_mode
+
+    task = get_task(name)
+    mode = default_action_mode(name)
+    assert mode == task.action_mode == "setpoints"
+    for algo in ("ppo", "sac"):
+        cfg = TrainConfig.from_hyperparams(load_hyperparams(algo, name), scenario=name, algo=algo, action_mode=mode,
+                                           seed=0)
+        env = make_env_config(cfg)
+        assert env == task.default_config(learning=env.learning, obs_mode="flat")
+
+
+def test_a_config_files_env_kwargs_is_a_recorded_departure(tmp_path):
+    from train.sb3.config import TrainConfig, load_hyperparams
+    from train.sb3.run_files import run_metadata
+
+    f = tmp_path / "c.yml"
+    f.write_text("close_formation:\n  env_kwargs:\n    reward:\n      benefit: 4.0\n")
+    params = load_hyperparams("ppo", "close_formation", f)
+    cfg = TrainConfig.from_hyperparams(params, scenario="close_formation", algo="ppo", action_mode="setpoints", seed=0)
+    meta = run_metadata(cfg, 0)
+    assert meta["task"] == "close_formation" and meta["task_version"] == 1
+    assert meta["departures"] == {"reward": {"benefit": 4.0}}
+    assert cfg.env_kwargs["reward"]["slot_scale_m"] == 0.29  # the rest of the benchmark kept
+
+
+def test_evaluate_warns_on_another_task_version():
+    from train.evaluation.policy_loader import warn_task_version
+
+    with pytest.warns(UserWarning, match="version 0 of task 'close_formation'"):
+        warn_task_version("p.zip", {"scenario": "close_formation", "task_version": 0})
+    with pytest.warns(UserWarning, match="unrecorded version"):
+        warn_task_version("p.zip", {"scenario": "close_formation"})
+    assert warn_task_version("p.zip", {"scenario": "close_formation", "task_version": 1}) is None

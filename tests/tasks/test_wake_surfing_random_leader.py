@@ -54,7 +54,10 @@ def test_the_variant_poses_the_task_with_the_leader_drawn():
     env = gym.make("formation_env/WakeSurfingRandomLeader-v1")
     try:
         cfg = env.unwrapped.config
-        assert cfg.scenario == "wake_surfing_random_leader" and cfg.randomisation == r
+        assert cfg.scenario == "wake_surfing_random_leader"
+        assert cfg.randomisation == dataclasses.replace(r, turbulence_sigma_mps=0.5, turbulence_sigma_spread=1.0,
+                                                        initial_offset_m=1.0)  # trained on; tested on r
+        assert task.evaluation.preset["randomisation"] == r
         assert cfg.reward == WAKE_SURFING_REWARD and cfg.action_mode == "setpoints" and cfg.compute_benefit
         env.reset(seed=5)
     finally:

@@ -13,7 +13,7 @@ import formation_env  # noqa: F401  (registers the ids)
 from formation_env.envs.config import Randomisation
 from formation_env.sim import Simulation
 from formation_env.tasks import make_config
-from formation_env.tasks import task_options
+from formation_env.tasks import get_task, task_options
 from formation_env.tasks.wake_surfing import WAKE_SURFING_RANDOMISATION, WAKE_SURFING_REWARD
 from formation_env.scenarios import Scenario, SlotSchedule, get_scenario
 from formation_env.sim.observe import box_depth_each, slot_error
@@ -202,7 +202,12 @@ def test_gym_id_and_parallel_env_pose_the_task():
     try:
         cfg = env.unwrapped.config
         assert cfg.action_mode == "setpoints" and cfg.compute_benefit
-        assert cfg.reward == WAKE_SURFING_REWARD and cfg.randomisation == WAKE_SURFING_RANDOMISATION
+        # the benchmark: the task's reward and its training randomisation (the turbulence drawn in [0, 0.5] m/s around
+        # the test level, a 1 m start jitter); the evaluation flies the test distribution at 0.25 m/s
+        train_rnd = dataclasses.replace(WAKE_SURFING_RANDOMISATION, turbulence_sigma_mps=0.5,
+                                        turbulence_sigma_spread=1.0, initial_offset_m=1.0)
+        assert cfg.reward == WAKE_SURFING_REWARD and cfg.randomisation == train_rnd
+        assert get_task("wake_surfing").evaluation.preset["randomisation"] == WAKE_SURFING_RANDOMISATION
         assert env.spec.max_episode_steps == round(SC.duration_s * 10)
         _, info = env.reset(seed=3)
         assert "box_depth_m" in info and "reward_box" in info
@@ -210,7 +215,7 @@ def test_gym_id_and_parallel_env_pose_the_task():
         env.close()
     cfg = make_config(scenario="wake_surfing", action_mode="residual")  # any option overrides the preset
     assert cfg.action_mode == "residual" and cfg.reward == WAKE_SURFING_REWARD
-    assert task_options("formation_keeping") == {}
+    assert task_options("formation_keeping")["reward"].separation == 25.0  # every task has its benchmark
 
 
 def test_crosswind_draw_is_across_the_initial_track_and_seeded():

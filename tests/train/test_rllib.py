@@ -211,7 +211,11 @@ def test_rllib_env_wrapper_keeps_agent_order_and_scales_rewards():
     cfg = {"scenario": "echelon", "action_mode": "surfaces", "learning": "all", "env_kwargs": {}, "reward_scale": 0.5}
     env = FormationMultiAgentEnv(cfg)
     assert env.possible_agents == ["uav_0", "uav_1", "uav_2"]
-    ref = formation_env.parallel_env("echelon", learning="all", action_mode="surfaces", obs_mode="flat")
+    from formation_env.envs.config import Randomisation
+
+    # env_kwargs {}: the generic posing, not the task's (a run's env_kwargs arrive merged over the task's)
+    ref = formation_env.parallel_env("echelon", learning="all", action_mode="surfaces", obs_mode="flat",
+                                     randomisation=Randomisation())
     obs, _ = env.reset(seed=4)
     obs_ref, _ = ref.reset(seed=4)
     assert all(np.array_equal(obs[a], obs_ref[a]) for a in ref.possible_agents)
