@@ -97,9 +97,9 @@ def _supersuit_vec_env_class():
 
         @staticmethod
         def _check_seed(seed) -> int:
-            if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
-                raise ValueError(f"seed must be an int >= 0 or None, got {seed!r}")
-            return int(seed)
+            from ..sim.validation import MAX_SEED, check_seed
+
+            return check_seed(seed, allow_none=False, top=MAX_SEED - 2**16)  # copy c gets seed + c
 
         def seed(self, seed: int | None = None):
             if seed is None:
