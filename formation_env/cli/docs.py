@@ -149,16 +149,18 @@ def task_page(task, notes: dict[str, str], results: frozenset = frozenset()) -> 
             sec["Description"].append(f"| reference optimum | follower's induced-drag saving {opt:.4f} in calm air "
                                       f"(the denominator of the harvest ratio) |")
     gid = task.gym_id
+    learn_kw = "" if task.learning == "all" or sc.n_vehicles == 1 else f", learning=\"{task.learning}\""
     sec["Gymnasium id and version"] += [
         "| | |", "|---|---|",
         f"| Gymnasium id | `{gid}` (single-agent view: the learner is `uav_{task.gym_learner}`) |" if gid else
         "| Gymnasium id | none |",
         f"| version | {task.version} (bumped whenever the task's behaviour changes; a test holds each version's "
         f"fingerprint) |",
-        f"| multi-agent | `formation_env.parallel_env(\"{task.name}\")`, "
-        f"`FormationVecEnv(n, scenario=\"{task.name}\")` |",
+        f"| multi-agent | `formation_env.parallel_env(\"{task.name}\"{learn_kw})`, "
+        f"`FormationVecEnv(n, scenario=\"{task.name}\"{learn_kw})` |",
         f"| benchmark configuration | `formation_env.tasks.get_task(\"{task.name}\").default_config()`: what "
-        f"`gym.make`, `parallel_env`, the vector envs and `formation-env train --scenario {task.name}` give |",
+        f"`gym.make`, `parallel_env`, the vector envs and `formation-env train --scenario {task.name}` give (the "
+        f"PettingZoo and vector envs make every UAV an agent unless `learning=` says otherwise) |",
     ]
     sec["Agents"] += [f"{n} Aerosonde UAV{'s' if n > 1 else ''} (span 2.9 m); agents: "
                       + ("every UAV (`learning=\"all\"`)" if task.learning == "all" or n == 1 else

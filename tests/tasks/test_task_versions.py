@@ -67,6 +67,11 @@ def test_gym_make_is_the_benchmark(name):
             assert getattr(cfg, key) == value, key
     finally:
         env.close()
+    # the PettingZoo env flies the same configuration (every UAV an agent unless learning= names the task's)
+    par = formation_env.parallel_env(name)
+    assert par.config == task.default_config(learning="all")
+    if task.get_scenario().n_vehicles > 1:
+        assert formation_env.parallel_env(name, learning=task.learning).config == task.default_config()
 
 
 def _sidecars():
