@@ -7,7 +7,7 @@ Layers (imports point down only): ``geometry`` -> ``wake`` (ELL) -> ``aircraft``
 ``formation_env.env(...)`` give the PettingZoo environments. See README.md.
 """
 
-__version__ = "0.1.0"
+__version__ = "0.2.0"
 
 from .kernel_cache import check_kernel_cache as _check_kernel_cache  # noqa: E402
 
