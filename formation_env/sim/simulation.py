@@ -57,6 +57,7 @@ from .params import (TURBULENCE_CODES, ActionParams, RewardParams, StepParams, a
                      turbulence_params, wake_arrays)
 from .state import StepOutput, init_output, init_state
 from .step import observe, refresh, step
+from .validation import batch_arrays as _batch_arrays
 from .validation import check_actions, check_batch_size, check_indices, check_seeds
 from .warmup import ensure_warm
 
@@ -80,14 +81,6 @@ def _trim_cached(airspeed_mps: float, altitude_m: float, fuel_kg: float):
 
 
 _TRIMS: dict = {}
-
-
-def _batch_arrays(state, output) -> list[np.ndarray]:
-    """Every array of ``state`` and ``output`` with the batch axis first (the turbulence fields' too)."""
-    out = []
-    for x in (*state, *output):
-        out.extend(x if isinstance(x, tuple) else (x,))
-    return out
 
 
 class SimOutput(NamedTuple):
@@ -365,11 +358,8 @@ class Simulation:
 
     def step(self, actions=None) -> SimOutput:
         """One decision of every formation: ``actions`` (B, A, 4) real numbers for the agents, None for zeros.
-
-        Checked (:func:`~formation_env.sim.validation.check_actions`): the shape exactly (B, A, 4), real numbers
-        (bool, complex, strings refused), NaN or inf a ``ValueError`` naming the formations; values outside
-        [-1, 1] are clipped to it, the action space's rule. A formation whose episode ended is frozen (module
-        docstring): its state, observation and done flags held, its reward 0."""
+        Checked as the module docstring says (:func:`~formation_env.sim.validation.check_actions`): values outside
+        [-1, 1] clipped to it, the action space's rule; a formation whose episode ended stays frozen."""
         if not self._all_reset and not self._reset_once.all():
             raise RuntimeError(f"step() before reset(): formation(s) {np.nonzero(~self._reset_once)[0].tolist()} "
                                "were never reset; call reset() first")

@@ -21,7 +21,7 @@ from dataclasses import fields
 
 import numpy as np
 
-__all__ = ["MAX_SEED", "MEMORY_FRACTION", "check_actions", "check_action", "clipped_values", "check_seed",
+__all__ = ["MAX_SEED", "batch_arrays", "MEMORY_FRACTION", "check_actions", "check_action", "clipped_values", "check_seed",
            "check_seeds", "check_indices", "check_count", "check_batch_size", "physical_memory_bytes",
            "nested_options", "format_bytes"]
 
@@ -237,3 +237,12 @@ def nested_options(owner: str, name: str, cls, value):
         return cls(**value)
     raise ValueError(f"{owner}: {name} must be a {cls.__name__} or a dict of its options {valid}, "
                      f"got {type(value).__name__}")
+
+
+def batch_arrays(state, output) -> list[np.ndarray]:
+    """Every array of a Simulation's ``state`` and ``output`` with the batch axis first (the turbulence fields'
+    too): what :func:`check_batch_size` sizes and what a frozen formation keeps."""
+    out = []
+    for x in (*state, *output):
+        out.extend(x if isinstance(x, tuple) else (x,))
+    return out
