@@ -50,6 +50,16 @@ def _agent_policy(spec: str) -> EvalPolicy:
     return EvalPolicy(spec, str(agent.action_mode), agent.act, float(agent.control_hz), reset=agent.reset)
 
 
+def _stamp(config: dict) -> dict:
+    """The task, version and departures of a run's config.yaml (train.sb3.run_files.task_stamp), {} if unreadable."""
+    from ..sb3.run_files import task_stamp
+
+    try:
+        return task_stamp(config["scenario"], config.get("env_kwargs") or {}, config["action_mode"])
+    except (KeyError, TypeError, ValueError):
+        return {}
+
+
 def policy_metadata(path: Path) -> dict:
     """Metadata of a policy zip: its sidecar ``<stem>.json``, else its run's ``config.yaml``."""
     side = path.with_suffix(".json")
@@ -69,7 +79,8 @@ def policy_metadata(path: Path) -> dict:
                                      else bool(data.get("action_guard", False))),
                     "residual_on": data.get("residual_on"),
                     "neighbour_wind": bool((data.get("env_kwargs") or {}).get("neighbour_wind", False)),
-                    "neighbour_attitude": bool((data.get("env_kwargs") or {}).get("neighbour_attitude", False))}
+                    "neighbour_attitude": bool((data.get("env_kwargs") or {}).get("neighbour_attitude", False)),
+                    **_stamp(data)}
     return {}
 
 
