@@ -25,12 +25,12 @@ from pathlib import Path
 import torch
 from stable_baselines3 import PPO
 from stable_baselines3.common.utils import LinearSchedule
-from stable_baselines3.common.vec_env import VecEnvWrapper
 
 from formation_env.envs import FormationVecEnv
 from formation_env.tasks import get_task
 from train.evaluation.evaluate import evaluate
 from train.sb3.central_critic import CentralCriticPolicy, GlobalStateVecEnv
+from train.sb3.reward_scale import ScaleReward
 
 TASK = get_task("vee5")
 
@@ -42,21 +42,6 @@ PPO_KWARGS = dict(learning_rate=LinearSchedule(3e-4, 0.0, 1.0),  # decayed linea
                   n_steps=128, batch_size=512, n_epochs=10, gamma=0.995, gae_lambda=0.95, clip_range=0.2,
                   ent_coef=0.0, vf_coef=0.5, max_grad_norm=0.5)
 NET = dict(net_arch=[64, 64], activation_fn=torch.nn.Tanh, log_std_init=-1.0)
-
-
-class ScaleReward(VecEnvWrapper):
-    """The learner's rewards times ``scale`` (``infos[i]["episode"]`` keeps the env's own return)."""
-
-    def __init__(self, venv, scale: float) -> None:
-        super().__init__(venv)
-        self.scale = scale
-
-    def reset(self):
-        return self.venv.reset()
-
-    def step_wait(self):
-        obs, reward, done, infos = self.venv.step_wait()
-        return obs, reward * self.scale, done, infos
 
 
 def main() -> None:

@@ -23,12 +23,12 @@ from pathlib import Path
 
 import torch
 from stable_baselines3 import PPO
-from stable_baselines3.common.vec_env import VecEnvWrapper
 
 from formation_env.envs import FormationVecEnv
 from formation_env.tasks import get_task
 from train.evaluation.evaluate import evaluate
 from train.sb3.guard import GuardedVecEnv
+from train.sb3.reward_scale import ScaleReward
 
 TASK = get_task("close_formation")
 
@@ -39,21 +39,6 @@ REWARD_SCALE = 0.05        # per-episode returns ~ -900 -> ~ -45 for the value l
 PPO_KWARGS = dict(learning_rate=3e-4, n_steps=128, batch_size=512, n_epochs=10, gamma=0.995, gae_lambda=0.95,
                   clip_range=0.2, ent_coef=0.0, vf_coef=0.5, max_grad_norm=0.5,
                   policy_kwargs=dict(net_arch=[64, 64], activation_fn=torch.nn.Tanh, log_std_init=-1.0))
-
-
-class ScaleReward(VecEnvWrapper):
-    """The learner's rewards times ``scale`` (``infos[i]["episode"]`` keeps the env's own return)."""
-
-    def __init__(self, venv, scale: float) -> None:
-        super().__init__(venv)
-        self.scale = scale
-
-    def reset(self):
-        return self.venv.reset()
-
-    def step_wait(self):
-        obs, reward, done, infos = self.venv.step_wait()
-        return obs, reward * self.scale, done, infos
 
 
 def make_env(n_formations: int, seed: int):

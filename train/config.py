@@ -11,7 +11,7 @@ import copy
 from pathlib import Path
 
 __all__ = ["ACTION_MODES", "ENV_KEYS", "HYPERPARAMS_DIR", "load_yaml", "merge_config", "config_section",
-           "task_env_kwargs", "with_task_env", "env_departures",
+           "task_env_kwargs", "with_task_env", "env_departures", "task_stamp", "default_action_mode",
            "env_config_for", "VALIDATION_SEED_BASE", "TEST_SEED_BASE", "MIN_VALIDATION_EPISODES"]
 
 ACTION_MODES = ("surfaces", "residual", "setpoints")
@@ -100,6 +100,30 @@ def env_departures(scenario: str, env_kwargs: dict) -> dict:
             if (d if a is None else a) != (d if b is None else b):
                 out[k] = b
     return out
+
+
+def default_action_mode(scenario: str) -> str:
+    """The action interface of the task flown on ``scenario`` (:attr:`formation_env.tasks.Task.action_mode`), or
+    set-points for a scenario no task poses: both backends' default."""
+    from formation_env.tasks import task_for_scenario
+
+    task = task_for_scenario(scenario)
+    return "setpoints" if task is None else task.action_mode
+
+
+def task_stamp(scenario: str, env_kwargs: dict, action_mode: str) -> dict:
+    """The task and version a run was made on and how its environment departs from the task's benchmark
+    configuration ({} for a scenario no task poses): ``{"task": name, "task_version": v, "departures": {...}}``, the
+    departures empty when the run trained on the benchmark task itself."""
+    from formation_env.tasks import task_for_scenario
+
+    task = task_for_scenario(scenario)
+    if task is None:
+        return {}
+    departures = env_departures(scenario, env_kwargs)
+    if action_mode != task.action_mode:
+        departures["action_mode"] = action_mode
+    return {"task": task.name, "task_version": task.version, "departures": departures}
 
 
 def config_section(data: dict, scenario: str) -> dict:

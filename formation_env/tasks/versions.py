@@ -36,6 +36,8 @@ def fingerprint(gym_id: str, decisions: int = FINGERPRINT_DECISIONS) -> dict:
     of them rounded to 6 significant digits (for display; the comparison uses the numbers)."""
     import gymnasium as gym
 
+    if isinstance(decisions, bool) or not isinstance(decisions, int) or not 1 <= decisions <= 100_000:
+        raise ValueError(f"fingerprint: decisions must be an integer in [1, 100000], got {decisions!r}")
     env = gym.make(gym_id)
     try:
         space = env.action_space

@@ -51,8 +51,8 @@ def _agent_policy(spec: str) -> EvalPolicy:
 
 
 def _stamp(config: dict) -> dict:
-    """The task, version and departures of a run's config.yaml (train.sb3.run_files.task_stamp), {} if unreadable."""
-    from ..sb3.run_files import task_stamp
+    """The task, version and departures of a run's config.yaml (:func:`train.config.task_stamp`), {} if unreadable."""
+    from ..config import task_stamp
 
     try:
         return task_stamp(config["scenario"], config.get("env_kwargs") or {}, config["action_mode"])

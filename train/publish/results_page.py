@@ -23,6 +23,8 @@ from pathlib import Path
 
 import numpy as np
 
+from formation_env.constants import AEROSONDE_SPAN_M
+
 __all__ = ["RECORDS", "RecordSource", "collect", "results_markdown", "readme_table", "marl_eval_json",
            "write_results", "PAGE", "MARL_EVAL", "README"]
 
@@ -34,7 +36,7 @@ BENCH_JSON = REPO / "docs" / "bench.json"      # `formation-env bench --json > d
 PERFORMANCE = REPO / "docs" / "performance.md"
 README = REPO / "README.md"
 N_BOOT = 2000  # bootstrap resamples per interval: the intervals' own Monte Carlo error is below their last digit
-SPAN_M = 2.9   # formation_env.constants.AEROSONDE_SPAN_M (the unit of the slot errors on the page)
+SPAN_M = AEROSONDE_SPAN_M  # the unit of the slot errors on the page
 
 #: the classical controllers (agents/): the baselines a learned policy is compared with
 CLASSICAL = {"pid": "thesis PID", "pid_formation": "PID formation keeper", "station_keeper": "station keeper",
@@ -194,7 +196,7 @@ def _level_rows(task, level: dict) -> tuple[list[dict], str | None]:
     return rows, (best["group"] if best else None)
 
 
-def _table(task, sigma: float, level: dict) -> tuple[str, list[dict], str | None]:
+def _table(task, level: dict) -> tuple[str, list[dict], str | None]:
     from formation_env.tasks import HEADLINE_METRICS
 
     rows, best = _level_rows(task, level)
@@ -238,7 +240,7 @@ def results_markdown(data: dict | None = None) -> tuple[str, dict]:
                   f"({'higher' if ev.higher_is_better else 'lower'} is better).", ""]
         for sigma in sorted(levels, key=lambda s: (s != ev.headline_level, s)):
             level = levels[sigma]
-            table, rows, best = _table(task, sigma, level)
+            table, rows, best = _table(task, level)
             files = ", ".join(f"`{f}` (sha256 {d})" for f, d in sorted(level["files"].items()))
             parts += [f"### sigma {sigma:g} m/s", "", f"Records: {files}.", "", table, ""]
             if sigma == ev.headline_level:

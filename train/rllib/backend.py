@@ -150,6 +150,10 @@ def train_rllib(*, scenario: str | None = None, action_mode: str | None = None, 
         if scenario is None:
             raise ValueError("give --scenario")
         params = load_rllib_hyperparams(scenario, config_file)
+        if action_mode is None:  # the task's
+            from ..config import default_action_mode
+
+            action_mode = default_action_mode(scenario)
         if overrides:
             params = merge_config(params, overrides)
         cfg = RLlibTrainConfig.from_hyperparams(

@@ -9,6 +9,7 @@ import json
 import re
 from pathlib import Path
 
+from ..config import task_stamp
 from .config import TrainConfig, make_env_config
 
 __all__ = ["save_model_atomic", "save_buffer_atomic", "write_text_atomic", "latest_checkpoint", "run_metadata",
@@ -46,23 +47,6 @@ def latest_checkpoint(run_dir: str | Path) -> tuple[Path, int] | None:
         return None
     steps, path = max(found)
     return path, steps
-
-
-def task_stamp(scenario: str, env_kwargs: dict, action_mode: str) -> dict:
-    """The task and version a run was made on and how its environment departs from the task's benchmark
-    configuration ({} for a scenario no task poses): ``{"task": name, "task_version": v, "departures": {...}}``, the
-    departures empty when the run trained on the benchmark task itself."""
-    from formation_env.tasks import task_for_scenario
-
-    from ..config import env_departures
-
-    task = task_for_scenario(scenario)
-    if task is None:
-        return {}
-    departures = env_departures(scenario, env_kwargs)
-    if action_mode != task.action_mode:
-        departures["action_mode"] = action_mode
-    return {"task": task.name, "task_version": task.version, "departures": departures}
 
 
 def run_metadata(cfg: TrainConfig, steps: int, extra: dict | None = None) -> dict:

@@ -31,7 +31,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..config import merge_config
+from ..config import default_action_mode, merge_config
 from .callbacks import build_callbacks
 from .config import TrainConfig, load_hyperparams, make_env_config
 from .run_files import (latest_checkpoint, run_metadata, save_checkpoint, save_model_atomic, write_curve,
@@ -106,8 +106,6 @@ def build_model(cfg: TrainConfig, env):
 
 
 def make_train_env(cfg: TrainConfig, seed: int):
-    from stable_baselines3.common.vec_env import VecEnvWrapper
-
     from formation_env.envs import FormationVecEnv
 
     env_config = make_env_config(cfg)
@@ -128,18 +126,9 @@ def make_train_env(cfg: TrainConfig, seed: int):
         env = GlobalStateVecEnv(env, env.batch.agents_per_formation)
     if cfg.reward_scale == 1.0:
         return env
+    from .reward_scale import ScaleReward
 
-    class ScaleReward(VecEnvWrapper):
-        """Multiplies the learner's rewards by ``reward_scale`` (infos['episode'] stays unscaled)."""
-
-        def reset(self):
-            return self.venv.reset()
-
-        def step_wait(self):
-            obs, rew, done, infos = self.venv.step_wait()
-            return obs, rew * cfg.reward_scale, done, infos
-
-    return ScaleReward(env)
+    return ScaleReward(env, cfg.reward_scale)
 
 
 
@@ -154,15 +143,6 @@ def steps_to_run(model, asked: int) -> tuple[int, str]:
         chunk = n_envs
         why = f"the {n_envs} env indices step together"
     return -(-asked // chunk) * chunk, why
-
-def default_action_mode(scenario: str) -> str:
-    """The action interface of the task flown on ``scenario`` (:attr:`formation_env.tasks.Task.action_mode`), or
-    set-points for a scenario no task poses."""
-    from formation_env.tasks import task_for_scenario
-
-    task = task_for_scenario(scenario)
-    return "setpoints" if task is None else task.action_mode
-
 
 def train(*, scenario: str | None = None, algo: str | None = None, action_mode: str | None = None, seed: int = 0,
           steps: int | None = None, config_file: str | Path | None = None, out_dir: str | Path | None = None,
