@@ -25,6 +25,8 @@ import numpy as np
 
 from formation_env.constants import AEROSONDE_SPAN_M
 
+from .absolute import absolute_episodes, absolute_markdown
+
 __all__ = ["RECORDS", "RecordSource", "collect", "results_markdown", "readme_table", "marl_eval_json",
            "write_results", "PAGE", "MARL_EVAL", "README"]
 
@@ -178,7 +180,7 @@ def _level_rows(task, level: dict) -> tuple[list[dict], str | None]:
         ver = _matrix(runs, "rms_vertical_m")
         col = _matrix(runs, "collision")
         rows.append({"group": group, "label": _label(group, task.name), "runs": m.shape[0], "episodes": m.shape[1],
-                     "matrix": m, "headline": agg[stat], "mean": agg["mean"]["value"],
+                     "matrix": m, "names": [n for n, c in sorted(runs.items()) if key in c], "headline": agg[stat], "mean": agg["mean"]["value"],
                      "lateral_b": None if lat is None else float(np.sqrt(np.mean(lat ** 2)) / SPAN_M),
                      "vertical_b": None if ver is None else float(np.sqrt(np.mean(ver ** 2)) / SPAN_M),
                      "collisions": None if col is None else (int(col.sum()), int(col.size))})
@@ -245,6 +247,7 @@ def results_markdown(data: dict | None = None) -> tuple[str, dict]:
             parts += [f"### sigma {sigma:g} m/s", "", f"Records: {files}.", "", table, ""]
             if sigma == ev.headline_level:
                 summary[name] = {"task": task, "rows": rows, "best": best, "sigma": sigma}
+                parts += absolute_markdown(task, data)
     return "\n".join(parts).rstrip() + "\n", summary
 
 
@@ -287,11 +290,15 @@ def marl_eval_json(summary: dict) -> dict:
     for name, s in summary.items():
         metric = s["task"].evaluation.metric
         task_entry = out["formation_env"].setdefault(s["task"].gym_id, {})
+        absolute = absolute_episodes(name)
         for r in s["rows"]:
             algo = task_entry.setdefault(r["label"], {})
             for i, row in enumerate(r["matrix"]):
+                # the best seed's absolute metric is its flight on ten times the episodes, where recorded
+                best = absolute.get((r["group"], r["names"][i]))
+                best = row if best is None else best
                 algo[f"{i}"] = {"step_0": {"step_count": 0, metric: [round(float(v), 6) for v in row]},
-                                "absolute_metrics": {metric: [round(float(v), 6) for v in row]}}
+                                "absolute_metrics": {metric: [round(float(v), 6) for v in best]}}
     return out
 
 
