@@ -84,9 +84,15 @@ def _columns(episodes: list[dict]) -> dict[str, list]:
     cols = {}
     for k in KEEP:
         vals = [e.get(k) for e in episodes]
-        if all(isinstance(v, (int, float, bool, np.floating, np.integer)) and v is not None for v in vals):
-            cols[k] = [float(f"{float(v):.6g}") if k != "seed" else int(v) for v in vals]
+        if all(isinstance(v, (int, float, bool, np.floating, np.integer)) for v in vals):
+            # a quantity an episode does not reach (a failed reconfiguration's settling time) is null, not NaN
+            cols[k] = [int(v) if k == "seed" else (None if np.isnan(v) else float(f"{float(v):.6g}")) for v in vals]
     return cols
+
+
+def _dump(rec: dict) -> str:
+    """One line per column: the record stays readable and small."""
+    return json.dumps(rec, separators=(",", ":")).replace(',"', ',\n"') + "\n"
 
 
 def absolute_record(task_name: str, group: str, *, episodes: int = ABSOLUTE_EPISODES, log=print) -> dict:
@@ -143,7 +149,7 @@ def write_absolute(task_name: str, *, overwrite: bool = False, episodes: int = A
             continue
         rec["records"][group] = absolute_record(task_name, group, episodes=episodes, log=log)
         tmp = path.with_suffix(".json.tmp")
-        tmp.write_text(json.dumps(rec, indent=1) + "\n")
+        tmp.write_text(_dump(rec))
         tmp.replace(path)
     return path
 
