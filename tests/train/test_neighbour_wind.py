@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 
 from formation_env.envs.observations import observation_size
+from formation_env.sim.layout import ObservationLayout
 from train.evaluation.ablation import ablated
 from train.evaluation.evaluate import evaluate
 from train.evaluation.policy_loader import load_policy
@@ -37,22 +38,24 @@ def test_a_run_with_a_neighbour_group_is_flown_with_it(tmp_path, tiny, monkeypat
           progress_bar=False, log=lambda m: None)
     other = next(o for o in OPTIONS if o != key)
     meta = json.loads((out / "best_model.json").read_text())
-    assert meta[key] is True and meta["action_guard"] is True and other not in meta
+    trained = ObservationLayout.of(3, 2, **{key: True})  # echelon3: 3 UAVs, each observing 2
+    assert meta["observation"] == trained.to_dict() and meta["action_guard"] is True
+    assert [key, 6] in meta["observation"]["groups"] and other not in dict(meta["observation"]["groups"])
     pub = tmp_path / "pub"
     pub.mkdir()
     monkeypatch.setattr(publish_mod, "POLICIES", pub)
     publish_mod.publish(out, "p")
     side = json.loads((pub / "p.json").read_text())
-    assert side["env"][key] is True
+    assert side["env"]["observation"] == trained.to_dict()
     pol = load_policy(str(pub / "p.zip"))
-    assert getattr(pol, key) and not getattr(pol, other)
+    assert pol.observation == trained and pol.observation.options == {key: True}
     # evaluate flies it with the observation it was trained on (3 UAVs, 2 neighbours, 3 values each: 6 more values;
     # with the plain one the network would be fed 59 values for its 65 and fail)
     res = evaluate([str(pub / "p.zip")], scenario="echelon3", episodes=1, duration_s=2.0, plots=False, n_boot=10,
                    ablations=[key])
     assert set(res["policies"]) == {"p", f"p-without-{key}"}
     # the ablated copy masks exactly the new group of the longer observation and refuses the shorter one
-    hid = ablated(pol, [key], 3, 2, **{key: True})
+    hid = ablated(pol, [key], trained)
     obs = np.ones((2, observation_size(3, 2, **{key: True})), np.float32)
     assert hid.act(obs).shape == (2, 4)
     with pytest.raises(ValueError, match="observation length 59, expected 65"):
@@ -88,10 +91,10 @@ def test_the_classical_agents_read_the_longer_observation_when_told():
     from agents.station_keeper import StationKeeper
 
     pairs = _paired_observations()
-    plain, winds = SeparationGuard(GuardGains(guard_m=30.0)), SeparationGuard(GuardGains(guard_m=30.0),
-                                                                              neighbour_wind=True)
-    keepers = StationKeeper(), StationKeeper(neighbour_wind=True)
-    pids = PIDFormation(), PIDFormation(neighbour_wind=True)
+    told = ObservationLayout(optional=("neighbour_wind",))  # any formation: the length gives the neighbours
+    plain, winds = SeparationGuard(GuardGains(guard_m=30.0)), SeparationGuard(GuardGains(guard_m=30.0), layout=told)
+    keepers = StationKeeper(), StationKeeper(layout=told)
+    pids = PIDFormation(), PIDFormation(layout=told)
     for agent in keepers + pids:
         agent.reset(3)  # the env flies every UAV: three rows
     rng = np.random.default_rng(0)
@@ -108,5 +111,5 @@ def test_the_classical_agents_read_the_longer_observation_when_told():
     _, wrong = observation_groups(pairs[0][1], "test")
     assert wrong["neighbours"].shape[1] == 18  # untold: three neighbours, the third made of the winds
     with pytest.raises(ValueError, match=r"test.act: observation length 59 is not that of an observation with "
-                                         r"neighbours' winds \(47 \+ 9 k, k >= 1\)"):
-        observation_groups(pairs[0][0], "test", neighbour_wind=True)
+                                         r"neighbour_wind \(47 \+ 9 k, k >= 1\)"):
+        observation_groups(pairs[0][0], "test", told)
