@@ -35,7 +35,8 @@ def observation_groups(obs, owner: str, layout: ObservationLayout | None = None)
 
 
 def agent_layout(layout, owner: str) -> ObservationLayout:
-    """``layout`` (None: no optional group) checked: an :class:`ObservationLayout`, else a ValueError naming ``owner``."""
+    """``layout`` (None: no optional group) checked: an :class:`ObservationLayout`, else a ValueError naming
+    ``owner``."""
     if layout is None:
         return ObservationLayout()
     if not isinstance(layout, ObservationLayout):

@@ -182,7 +182,8 @@ class StationKeeper(RowIntegrators):
         with the slot error taken to the displaced slot, and its own offsets are shifted back by the displacement. How
         a wake-surfing controller that chooses where to fly (the extremum seeker, the oracle ceiling) lets the keeper
         hold it; the caller maps the offsets onto its own set-point range (a safe box's)."""
-        shifted, groups = observation_groups(np.array(obs, dtype=float), "StationKeeper", self.layout)  # groups: views into a copy
+        # groups: views into a copy
+        shifted, groups = observation_groups(np.array(obs, dtype=float), "StationKeeper", self.layout)
         off = np.asarray(offset_m, dtype=float)
         if off.shape != (shifted.shape[0], 2):
             raise ValueError(f"StationKeeper.hold_offset_m: offset_m must have shape ({shifted.shape[0]}, 2), got "
