@@ -8,9 +8,11 @@ meaning). :class:`ObservationLayout` is the one value the rest of the package pa
 (:meth:`ObservationLayout.to_dict`), and agents, evaluation, replay and training read groups through
 :meth:`ObservationLayout.slice` and :meth:`ObservationLayout.split` instead of computing offsets.
 
-Adding an observation group touches the compiled kernel that computes it (``sim/observe.py``, with its switch in
-``StepParams``), its numpy oracle (``tests/oracles/env_step.py``) and its declaration here (plus, for an optional
-group, the EnvConfig field of its switch): whatever merely passes a layout along stays as it is.
+Adding an observation group touches the compiled kernel that computes it (``sim/observe.py``; an optional group's
+switch is a ``StepParams`` field, ``sim/params.py``, that ``sim/stages.py`` hands to the kernel), its numpy oracle
+(``tests/oracles/env_step.py``), its declaration here and, for an optional group, the EnvConfig field of its switch
+(``sim/config.py``; its check is generic): the Simulation, the envs, the agents, evaluation, training, sidecars,
+replay and the documentation's groups table read the layout and stay as they are.
 
 This module is plain Python on purpose: no compiled kernel imports it, so editing it recompiles nothing
 (:mod:`formation_env.kernel_cache`).
