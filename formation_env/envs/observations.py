@@ -80,4 +80,5 @@ def groups_table() -> list[str]:
     return rows
 
 
-__doc__ += "\n" + "\n".join(groups_table()) + "\n"
+if __doc__:  # None under python -OO
+    __doc__ += "\n" + "\n".join(groups_table()) + "\n"
