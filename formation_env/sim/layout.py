@@ -27,7 +27,8 @@ import numpy as np
 
 __all__ = ["ObservationGroup", "GROUPS", "OPTIONS", "MAX_NEIGHBOURS", "ObservationLayout"]
 
-#: the most neighbours an agent observes (EnvConfig.neighbour_count, Scenario.neighbour_count)
+#: the most neighbours :meth:`ObservationLayout.fit` reads from an observation's length (EnvConfig.neighbour_count
+#: and Scenario.neighbour_count go up to it too)
 MAX_NEIGHBOURS = 64
 
 
@@ -118,9 +119,8 @@ class ObservationLayout:
     def __post_init__(self) -> None:
         k = self.neighbours
         if k is not None:
-            if isinstance(k, (bool, np.bool_)) or not isinstance(k, (int, np.integer)) or not 0 <= k <= MAX_NEIGHBOURS:
-                raise ValueError(f"ObservationLayout: neighbours must be None or an integer in 0..{MAX_NEIGHBOURS}, "
-                                 f"got {k!r}")
+            if isinstance(k, (bool, np.bool_)) or not isinstance(k, (int, np.integer)) or k < 0:
+                raise ValueError(f"ObservationLayout: neighbours must be None or an integer >= 0, got {k!r}")
             object.__setattr__(self, "neighbours", int(k))
         object.__setattr__(self, "optional", _optional_names(self.optional))
 
