@@ -226,5 +226,7 @@ class ExtremumSeeking:
         """(N, 3) position minus the nominal slot demand, m, slot frame (from the observation)."""
         from agents.pid_formation import inverse_slog
         from formation_env.envs.observations import POSITION_SCALE_M
+        from formation_env.sim.layout import ObservationLayout
 
-        return inverse_slog(obs[:, 10:13], POSITION_SCALE_M)
+        # the group lies before the neighbours' groups: at the same place in every layout
+        return inverse_slog(obs[:, ObservationLayout(0).slice("slot_position_error")], POSITION_SCALE_M)

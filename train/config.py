@@ -24,10 +24,12 @@ from formation_env.tasks.base import TEST_SEED_BASE, VALIDATION_SEED_BASE  # noq
 # for tests, with a note in the log).
 MIN_VALIDATION_EPISODES = 32
 
-# The EnvConfig options a hyperparameter file's ``env_kwargs`` may set (both backends).
+# The EnvConfig options a hyperparameter file's ``env_kwargs`` may set (both backends): these, and every optional
+# observation group's switch (formation_env.sim.layout.OPTIONS, so a new group needs no entry here).
+from formation_env.sim.layout import OPTIONS as OBSERVATION_OPTIONS  # noqa: E402
+
 ENV_KEYS = {"control_hz", "wake", "collision_separation_b", "duration_s", "compute_benefit", "reward", "turbulence_field",
-            "wake_coupling", "wake_fidelity", "randomisation", "learning", "leader_reference",
-            "neighbour_wind", "neighbour_attitude"}
+            "wake_coupling", "wake_fidelity", "randomisation", "learning", "leader_reference", *OBSERVATION_OPTIONS}
 
 
 def load_yaml(path: str | Path) -> dict:

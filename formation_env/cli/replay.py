@@ -116,8 +116,7 @@ def _fly_policy(policy, scenario: str, *, seed: int, wake: bool, turbulence: flo
 
     cfg = eval_env_config(scenario, policy.action_mode, turbulence_sigma_mps=turbulence, wake=wake,
                           control_hz=policy.control_hz, duration_s=duration_s,
-                          neighbour_wind=getattr(policy, "neighbour_wind", False),
-                          neighbour_attitude=getattr(policy, "neighbour_attitude", False))
+                          observation=getattr(policy, "observation", None))  # the policy's optional groups
     sim = Simulation(cfg, batch_size=1)
     rec = _Replay()
     res = rollout(sim, policy, [seed], recorders=[rec])

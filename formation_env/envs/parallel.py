@@ -25,7 +25,7 @@ from ..sim.validation import check_action, check_seed
 from ..sim.validation import clipped_values as _clipped_values
 from ..tasks import make_config
 from .config import EnvConfig
-from .observations import OBS_CLIP, group_sizes, to_dict
+from .observations import OBS_CLIP
 
 __all__ = ["FormationParallelEnv", "make_config", "check_action", "reset_options", "IGNORED_RESET_OPTIONS"]
 
@@ -62,6 +62,7 @@ class FormationParallelEnv(ParallelEnv):
             raise ValueError(f"render_mode must be one of {self.metadata['render_modes']} or None, got {render_mode!r}")
         self.render_mode = render_mode
         self.sim = Simulation(self.config, batch_size=1)  # the episode's state lives there, nowhere else
+        self.observation_layout = self.sim.observation_layout  # the groups of one observation (and the Dict's keys)
         n = self.sim.n_vehicles
         self.agent_indices = self.sim.agent_indices
         self.substeps = self.sim.substeps
@@ -71,7 +72,7 @@ class FormationParallelEnv(ParallelEnv):
         self.agents: list[str] = []
         if self.config.obs_mode == "dict":
             self._obs_space = spaces.Dict({k: spaces.Box(-OBS_CLIP, OBS_CLIP, (s,), dtype=np.float32)
-                                           for k, s in group_sizes(n, self.sim.neighbour_count, self.sim.neighbour_wind, self.sim.neighbour_attitude).items() if s})
+                                           for k, s in self.sim.observation_layout.groups.items() if s})
         else:
             self._obs_space = spaces.Box(-OBS_CLIP, OBS_CLIP, (self.sim.obs_size,), dtype=np.float32)
         self._act_space = spaces.Box(-1.0, 1.0, (4,), dtype=np.float32)
@@ -176,8 +177,8 @@ class FormationParallelEnv(ParallelEnv):
 
     def _observations(self) -> dict:
         allobs = self.sim.output.observation[0].astype(np.float32)
-        n = self.sim.n_vehicles
-        return {a: to_dict(allobs[i], n, self.sim.neighbour_count, self.sim.neighbour_wind, self.sim.neighbour_attitude) if self.config.obs_mode == "dict" else allobs[i] for a, i in self._index.items()}
+        split = self.sim.observation_layout.split
+        return {a: split(allobs[i]) if self.config.obs_mode == "dict" else allobs[i] for a, i in self._index.items()}
 
     def _infos(self) -> dict:
         per_vehicle = self.sim.infos(0)

@@ -174,6 +174,7 @@ class FormationVecEnv(OneObjectVecEnvMethods, VecEnv):
         cfg = make_config(config, **options)
         self.batch = BatchedFormations(n_formations, cfg, seed)
         self.config = cfg
+        self.observation_layout = self.batch.sim.observation_layout  # the groups of one observation
         self.detailed_infos = bool(detailed_infos)
         obs_space = spaces.Box(-OBS_CLIP, OBS_CLIP, (self.batch.obs_size,), dtype=np.float32)
         act_space = spaces.Box(-1.0, 1.0, (4,), dtype=np.float32)
@@ -250,6 +251,7 @@ class FormationVectorEnv(gym.vector.VectorEnv):
         cfg = make_config(config, **options)
         self.batch = BatchedFormations(n_formations, cfg, seed)
         self.config = cfg
+        self.observation_layout = self.batch.sim.observation_layout  # the groups of one observation
         self.num_envs = self.batch.num_envs
         self.single_observation_space = spaces.Box(-OBS_CLIP, OBS_CLIP, (self.batch.obs_size,), dtype=np.float32)
         self.single_action_space = spaces.Box(-1.0, 1.0, (4,), dtype=np.float32)

@@ -29,8 +29,7 @@ DEFAULT_TURBULENCE_SIGMA_MPS = 1.0  # the test set's Dryden level (scenarios wit
 def eval_env_config(scenario: str, action_mode: str, *, turbulence_sigma_mps: float | None = None, wake: bool = True,
                     control_hz: float = 10.0, compute_benefit: bool = False, duration_s: float | None = None,
                     turbulence_field: str | None = None, wake_fidelity: str | None = None, throttle_max: float = 1.0,
-                    leader_reference: str | None = None, neighbour_wind: bool = False,
-                    neighbour_attitude: bool = False):
+                    leader_reference: str | None = None, observation=None):
     """The evaluation episodes' EnvConfig: the thesis scenario with wake and turbulence on (``turbulence_field``
     None: the env's default field, one frozen von Karman field per formation). With
     its defaults (sigma 1 m/s, wake on, the scenario's duration, no other randomisation than the task's
@@ -43,13 +42,14 @@ def eval_env_config(scenario: str, action_mode: str, *, turbulence_sigma_mps: fl
     with the fidelity it records). ``throttle_max``: the flight control's throttle ceiling (1: the Aerosonde's; above 1
     the counterfactual engine of the ceiling measurements, :class:`formation_env.envs.config.EnvConfig`).
     ``leader_reference``: "ground" or "air" (how vehicle 0's reference moves, EnvConfig.leader_reference); None the
-    scenario's. ``neighbour_wind``, ``neighbour_attitude``: the observation options a policy was trained with
-    (EnvConfig's)."""
+    scenario's. ``observation``: the :class:`~formation_env.sim.layout.ObservationLayout` a policy was trained on (its
+    optional groups switched on; None: none)."""
     from formation_env.envs.config import EnvConfig, Randomisation
     from formation_env.tasks import task_for_scenario, task_learning
 
     if turbulence_field is None:
         turbulence_field = EnvConfig.turbulence_field  # the dataclass default
+    switches = {} if observation is None else observation.options  # the optional groups it observes
     t = task_for_scenario(scenario)
     preset = None if t is None or t.evaluation.preset is None else dict(t.evaluation.preset)
     if preset:  # the task's own test distribution (wake_surfing): its randomisation, reward and benefit, at this level
@@ -60,7 +60,7 @@ def eval_env_config(scenario: str, action_mode: str, *, turbulence_sigma_mps: fl
         return EnvConfig(scenario=scenario, learning=task_learning(scenario), action_mode=action_mode, wake=wake,
                          control_hz=control_hz, duration_s=duration_s, turbulence_field=turbulence_field,
                          wake_fidelity=wake_fidelity, throttle_max=throttle_max, leader_reference=leader_reference,
-                         neighbour_wind=neighbour_wind, neighbour_attitude=neighbour_attitude, randomisation=rnd, **preset)
+                         randomisation=rnd, **switches, **preset)
     if turbulence_sigma_mps is None:
         turbulence_sigma_mps = DEFAULT_TURBULENCE_SIGMA_MPS
     extra = dict(t.test_randomisation) if t is not None else {}
@@ -69,8 +69,7 @@ def eval_env_config(scenario: str, action_mode: str, *, turbulence_sigma_mps: fl
     return EnvConfig(scenario=scenario, learning=task_learning(scenario), action_mode=action_mode, wake=wake, control_hz=control_hz,
                      compute_benefit=compute_benefit, duration_s=duration_s, turbulence_field=turbulence_field,
                      wake_fidelity=wake_fidelity, throttle_max=throttle_max, leader_reference=leader_reference,
-                     neighbour_wind=neighbour_wind, neighbour_attitude=neighbour_attitude,
-                     randomisation=Randomisation(turbulence_sigma_mps=turbulence_sigma_mps, **extra))
+                     **switches, randomisation=Randomisation(turbulence_sigma_mps=turbulence_sigma_mps, **extra))
 
 
 def reference_saving(scenario_name: str) -> float | None:

@@ -18,6 +18,7 @@ from pathlib import Path
 import yaml
 
 from formation_env.io import atomic_write, atomic_write_json
+from formation_env.sim.layout import OPTIONS as OBSERVATION_OPTIONS
 
 POLICIES = Path(__file__).resolve().parents[1] / "policies"
 
@@ -49,8 +50,7 @@ def publish(run_dir: str | Path, name: str, *, eval_json: str | Path | None = No
         "env": {**{k: best[k] for k in ("algo", "scenario", "action_mode", "control_hz")},
                 **({"action_guard": best["action_guard"]} if best.get("action_guard") else {}),
                 **({"residual_on": best["residual_on"]} if best.get("residual_on") else {}),
-                **({"neighbour_wind": True} if best.get("neighbour_wind") else {}),
-                **({"neighbour_attitude": True} if best.get("neighbour_attitude") else {})},
+                **{k: best[k] for k in ("observation", *OBSERVATION_OPTIONS) if best.get(k)}},
         "command": cfg.get("command"),
         "seed": c["seed"],
         "num_timesteps": best["num_timesteps"],
