@@ -45,3 +45,28 @@ def test_task_recipe_trains_and_flies(tmp_path, tiny, algo, scenario):
     assert (pol.reset is not None) == (algo == "recurrent_ppo")
     eps = run_episodes(pol, eval_env_config(scenario, "setpoints", duration_s=1.0), [3, 4])
     assert len(eps) == 2 and all(np.isfinite(e["rms_slot_error_m"]) for e in eps)
+
+
+def test_the_committed_runs_script_trains_each_recipe_with_its_files_budget():
+    """train/committed_runs_65.sh: 2 algorithms x 3 tasks x 3 seeds, each command's --steps the hyperparameter
+    file's n_timesteps, each run written to its own directory."""
+    import os
+    import subprocess
+    from pathlib import Path
+
+    from train.sb3.config import load_hyperparams
+
+    script = Path(__file__).resolve().parents[2] / "train" / "committed_runs_65.sh"
+    out = subprocess.run(["bash", str(script), "RUNS"], capture_output=True, text=True, check=True,
+                         env={**os.environ, "PRINT": "1", "FE": "formation-env"}).stdout.splitlines()
+    assert len(out) == 18 and len(set(out)) == 18
+    seen = set()
+    for line in out:
+        words = line.split()
+        arg = {k: words[words.index(k) + 1] for k in ("--scenario", "--algo", "--steps", "--seed", "--out")}
+        task, algo, seed = arg["--scenario"], arg["--algo"], int(arg["--seed"])
+        assert int(arg["--steps"]) == load_hyperparams(algo, task)["n_timesteps"], line
+        assert arg["--out"] == f"RUNS/{task}_{algo}_seed{seed}"
+        seen.add((algo, task, seed))
+    assert seen == {(a, t, k) for a in ("sac", "recurrent_ppo") for t in ("close_formation", "vee5", "reconfiguration")
+                    for k in range(3)}
