@@ -32,7 +32,7 @@ jobs_list() {
     echo "sac vee5 575000 $seed"
     echo "sac reconfiguration 700000 $seed"
     echo "recurrent_ppo close_formation 2000000 $seed"
-    echo "recurrent_ppo vee5 900000 $seed"
+    echo "recurrent_ppo vee5 1000000 $seed"
     echo "recurrent_ppo reconfiguration 2000000 $seed"
   done
 }
