@@ -40,18 +40,19 @@ def test_versus_pairs_the_episodes_of_the_headline_metric(tmp_path, capsys):
     assert lv["probability_of_improvement"]["value"] > 0.8
     assert lv["candidate_runs"] == [f"close_formation_new_setpoints_seed{k}" for k in range(3)]
     # the reverse comparison: the same interval, negated
-    back = versus(rec, "close_formation_old_setpoints", "close_formation_new_setpoints", n_boot=500)["levels"]["sigma_1"]
+    new, old = "close_formation_new_setpoints", "close_formation_old_setpoints"
+    back = versus(rec, old, new, n_boot=500)["levels"]["sigma_1"]
     assert back["difference"] == pytest.approx(-lv["difference"]) and not back["better"]
 
     path = tmp_path / "rec.json"
     path.write_text(json.dumps(rec))
-    assert main([str(path), "close_formation_new_setpoints", "close_formation_old_setpoints", str(tmp_path / "o.json")]) == 0
+    assert main([str(path), new, old, str(tmp_path / "o.json")]) == 0
     assert "sigma_1: harvest_ratio" in capsys.readouterr().out
     assert json.loads((tmp_path / "o.json").read_text())["levels"]["sigma_1"]["better"]
     # one clear error, status 2: an unknown group, an existing output
-    assert main([str(path), "close_formation_sac_setpoints", "close_formation_old_setpoints", str(tmp_path / "p.json")]) == 2
+    assert main([str(path), "close_formation_sac_setpoints", old, str(tmp_path / "p.json")]) == 2
     assert "no policy close_formation_sac_setpoints_seed<k>" in capsys.readouterr().err
-    assert main([str(path), "close_formation_new_setpoints", "close_formation_old_setpoints", str(tmp_path / "o.json")]) == 2
+    assert main([str(path), new, old, str(tmp_path / "o.json")]) == 2
 
 
 def test_versus_a_success_rate():

@@ -5,8 +5,8 @@ keyword arguments, the spaces, the schedules) and ``*.pth`` members (torch tenso
 whatever code its author put there, so a policy file from elsewhere could run code on load. This loader never
 does: it reads the JSON as JSON, rebuilds each pickled entry from the readable description SB3 stores beside it,
 for the forms this project's trainings write (PPO with ``MlpPolicy`` or the MAPPO ``CentralCriticPolicy``,
-sb3-contrib's recurrent PPO with ``MlpLstmPolicy``, SAC, TD3; Box spaces; the standard activations) and hands those to SB3 as ``custom_objects``, so that SB3 unpickles
-none of them; the tensors SB3 loads with ``torch.load(weights_only=True)``, which builds tensors and plain
+sb3-contrib's recurrent PPO with ``MlpLstmPolicy``, SAC, TD3; Box spaces; the standard activations) and hands those
+to SB3 as ``custom_objects``, so that SB3 unpickles none of them; the tensors SB3 loads with ``torch.load(weights_only=True)``, which builds tensors and plain
 containers only. A file that is not such a zip (not a zip, truncated, corrupt, another library's, an entry this
 project does not write) is a ``ValueError`` saying it is not a readable policy, and nothing in it ran.
 """

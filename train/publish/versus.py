@@ -6,8 +6,8 @@ flew both seed groups.
 
 ``CANDIDATE`` and ``REFERENCE`` are seed groups of the record (its policies ``<group>_seed<k>``, e.g.
 ``close_formation_sac_setpoints`` and ``close_formation_ppo_setpoints``). Per turbulence level: the headline metric
-(:attr:`formation_env.tasks.Task.evaluation`'s ``metric``) averaged over each group's training seeds episode by episode,
-then paired by episode: ``difference`` = candidate - reference (positive: the candidate is higher) with its 95 % bootstrap interval (:func:`train.evaluation.stats.paired_comparison`, or
+(:attr:`formation_env.tasks.Task.evaluation`'s ``metric``) averaged over each group's training seeds episode by
+episode, then paired by episode: ``difference`` = candidate - reference (positive: the candidate is higher) with its 95 % bootstrap interval (:func:`train.evaluation.stats.paired_comparison`, or
 :func:`train.evaluation.stats.paired_rate_difference` for a 0/1 success); and rliable's probability that a candidate
 run beats a reference run on an episode, with its stratified-bootstrap interval (runs and episodes resampled;
 :func:`train.evaluation.aggregates.probability_of_improvement`).

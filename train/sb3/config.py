@@ -355,10 +355,10 @@ class TrainConfig:
         bad = sorted(set(self.algo_kwargs) - _ALGO_KEYS[self.algo])
         if bad:
             raise ValueError(f"unknown {self.algo} hyperparameter(s) {bad}; valid: {sorted(_ALGO_KEYS[self.algo] | _TRAIN_KEYS)}")
-        bad = sorted(set(self.policy_kwargs) - (_POLICY_KWARGS if self.algo == "recurrent_ppo"
-                                                 else _POLICY_KWARGS - _LSTM_KWARGS))
+        known = _POLICY_KWARGS if self.algo == "recurrent_ppo" else _POLICY_KWARGS - _LSTM_KWARGS
+        bad = sorted(set(self.policy_kwargs) - known)
         if bad:
-            raise ValueError(f"unknown policy_kwargs key(s) {bad}; valid: {sorted(_POLICY_KWARGS)}")
+            raise ValueError(f"unknown policy_kwargs key(s) {bad} for {self.algo}; valid: {sorted(known)}")
         bad = sorted(set(self.env_kwargs) - ENV_KEYS)
         if bad:
             raise ValueError(f"unknown env_kwargs key(s) {bad}; valid: {sorted(ENV_KEYS)}")
@@ -389,7 +389,8 @@ class TrainConfig:
 
 
 def _check_batch_fits(cfg: TrainConfig, env) -> None:
-    """A minibatch fits in what it is drawn from: (recurrent) PPO's rollout (n_steps x env indices), SAC/TD3's replay buffer."""
+    """A minibatch fits in what it is drawn from: (recurrent) PPO's rollout (n_steps x env indices), SAC/TD3's replay
+    buffer."""
     kw = cfg.algo_kwargs
     on_policy = cfg.algo in ("ppo", "recurrent_ppo")
     batch = kw.get("batch_size", {"ppo": 64, "recurrent_ppo": 128}.get(cfg.algo, 256))  # SB3's / sb3-contrib's defaults
