@@ -6,16 +6,17 @@
 # thread), then published into train/policies/ with their curves and validation history, then evaluated exactly as
 # the committed PPO policies: 100 held-out test episodes per turbulence level (sigma 0, 1, 1.5; close_formation also
 # 0.5, its protocol's), the three new seeds beside the three committed PPO seeds and the classical baselines in one
-# command (the same episodes: every comparison is paired), recorded with train.publish.levels_record, and compared
-# with PPO paired by episode on the task's headline metric (train.publish.versus).
+# command per task (the same episodes: every comparison is paired; two tasks at a time), recorded with
+# train.publish.levels_record, and compared with PPO paired by episode on the task's headline metric
+# (train.publish.versus).
 #
 # Run directories: RUNS/<task>_<algo>_seed<k> (log: RUNS/<task>_<algo>_seed<k>.log); published policies:
 # train/policies/<task>_<algo>_setpoints_seed<k>.{zip,json} with _curve.csv and _evaluations.json; evaluations:
-# RUNS/eval/<task>_<algo>; records: train/policies/<task>_<algo>_setpoints_levels.json and
-# train/policies/<task>_<algo>_setpoints_versus_ppo.json.
+# RUNS/eval/<task> (log: RUNS/eval/<task>.log); records: train/policies/<task>_algorithms_levels.json (SAC, recurrent
+# PPO, PPO and the baselines) and train/policies/<task>_<algo>_setpoints_versus_ppo.json.
 #
 # Usage: bash train/committed_runs_65.sh [RUNS_DIR]
-#   ONLY="algo:task:seed ..."  train a subset (e.g. ONLY="sac:vee5:1" to redo one run)
+#   ONLY="algo:task:seed ..."  train and publish a subset (e.g. ONLY="sac:vee5:1" to redo one run)
 #   NO_PUBLISH=1               train only;  NO_EVAL=1  train and publish, do not evaluate
 #   PRINT=1                    print the training commands and exit
 set -euo pipefail
@@ -64,19 +65,17 @@ mkdir -p "$RUNS"
 jobs_list | selected | xargs -P 2 -L 1 bash -c 'run_one "$0" "$1" "$2" "$3"'
 [ -n "${NO_PUBLISH:-}" ] && exit 0
 
-for algo in sac recurrent_ppo; do
-  for task in close_formation vee5 reconfiguration; do
-    for seed in 0 1 2; do
-      run="$RUNS/${task}_${algo}_seed${seed}"
-      wall=$("$PY" -c "import json,sys; print(json.load(open(sys.argv[1]))['wall_s'])" "$run/summary.json")
-      extra=()  # close_formation's policies fly through the guard's lateral clip, as its PPO policies (docs/close_formation.md)
-      if [ "$task" = close_formation ]; then extra=(--guard '{"clip_ramp": 0.25}'); fi
-      if [ ! -f "$run/best_model.zip" ]; then  # every validation had a collision: the selection rule chose no model
-        extra+=(--model final --note "every validation of the run had a collision: the final model")
-      fi
-      "$PY" -m train.publish "$run" "${task}_${algo}_setpoints_seed${seed}" --wall-s "$wall" ${extra[@]+"${extra[@]}"}
-    done
-  done
+jobs_list | selected | while read -r algo task _ seed; do  # ONLY: publish the runs it trained
+  run="$RUNS/${task}_${algo}_seed${seed}"
+  wall=$("$PY" -c "import json,sys; print(json.load(open(sys.argv[1]))['wall_s'])" "$run/summary.json" < /dev/null)
+  # close_formation's policies fly through the guard's lateral clip, as its PPO policies (docs/close_formation.md)
+  extra=()
+  if [ "$task" = close_formation ]; then extra=(--guard '{"clip_ramp": 0.25}'); fi
+  if [ ! -f "$run/best_model.zip" ]; then  # every validation had a collision: the selection rule chose no model
+    extra+=(--model final --note "every validation of the run had a collision: the final model")
+  fi
+  "$PY" -m train.publish "$run" "${task}_${algo}_setpoints_seed${seed}" --wall-s "$wall" ${extra[@]+"${extra[@]}"} \
+    < /dev/null
 done
 [ -n "${NO_EVAL:-}" ] && exit 0
 
@@ -88,16 +87,24 @@ baselines_of() {  # the classical baselines of the task's PPO record, and the st
   case $1 in vee5) echo "--policy pid --policy station_keeper" ;;
              *) echo "--policy pid --policy pid_formation --policy station_keeper" ;; esac
 }
-for algo in sac recurrent_ppo; do
-  for task in close_formation vee5 reconfiguration; do
-    new="${task}_${algo}_setpoints" ppo="${task}_ppo_setpoints" dir="$RUNS/eval/${task}_${algo}"
-    args="--scenario $task"
-    for k in 0 1 2; do args+=" --policy $P/${new}_seed$k.zip"; done
-    for k in 0 1 2; do args+=" --policy $P/${ppo}_seed$k.zip"; done
-    args+=" $(baselines_of "$task") --turbulence $(levels_of "$task") --episodes 100 --benefit --no-plots"
-    # shellcheck disable=SC2086  # $args is a list of plain words
-    "$FE" evaluate $args --out "$dir"
-    "$PY" -m train.publish.levels_record "$dir" "$P/${new}_levels.json" --command "formation-env evaluate $args --out DIR"
-    "$PY" -m train.publish.versus "$P/${new}_levels.json" "$new" "$ppo" "$P/${new}_versus_ppo.json"
+eval_one() {  # one evaluation per task: SAC, recurrent PPO and PPO (3 seeds each) and the baselines, same episodes
+  local task=$1 dir="$RUNS/eval/$1" args="--scenario $1"
+  for group in sac recurrent_ppo ppo; do
+    for k in 0 1 2; do args+=" --policy $P/${task}_${group}_setpoints_seed$k.zip"; done
+  done
+  args+=" $(baselines_of "$task") --turbulence $(levels_of "$task") --episodes 100 --benefit --no-plots"
+  # shellcheck disable=SC2086  # $args is a list of plain words
+  NUMBA_NUM_THREADS=1 "$FE" evaluate $args --out "$dir" > "$dir.log" 2>&1
+  "$PY" -m train.publish.levels_record "$dir" "$P/${task}_algorithms_levels.json" \
+    --command "formation-env evaluate $args --out DIR"
+}
+export -f eval_one levels_of baselines_of
+export P PY
+mkdir -p "$RUNS/eval"
+printf '%s\n' close_formation vee5 reconfiguration | xargs -P 2 -L 1 bash -c 'eval_one "$0"'
+for task in close_formation vee5 reconfiguration; do
+  for algo in sac recurrent_ppo; do
+    "$PY" -m train.publish.versus "$P/${task}_algorithms_levels.json" "${task}_${algo}_setpoints" "${task}_ppo_setpoints" \
+      "$P/${task}_${algo}_setpoints_versus_ppo.json"
   done
 done
