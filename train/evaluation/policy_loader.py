@@ -112,7 +112,8 @@ def warn_task_version(spec: str, meta: dict) -> str | None:
 def load_policy(spec: str, *, action_mode: str | None = None, name: str | None = None, device: str = "cpu") -> EvalPolicy:
     """``"pid"`` (the thesis FCS: zero residual), ``"pid_formation"`` (the classical formation-keeping
     baseline of ``agents.pid_formation``), ``"station_keeper"`` (``agents.station_keeper``), the path of an SB3 zip (its algo and action mode come from
-    the sidecar JSON or the run's config.yaml; ``action_mode`` overrides), or an RLlib checkpoint / run
+    the sidecar JSON or the run's config.yaml; ``action_mode`` overrides; a recurrent PPO's ``reset(n_rows)`` starts
+    its LSTM state, which ``act`` carries from one decision to the next), or an RLlib checkpoint / run
     directory of ``formation-env train --backend rllib`` (its metadata fixes the action mode).
 
     Security: an SB3 zip is read without unpickling anything (:mod:`train.evaluation.safe_zip`; a file that is not
@@ -152,11 +153,10 @@ def load_policy(spec: str, *, action_mode: str | None = None, name: str | None =
     algo = meta.get("algo")
     # no pickle in the zip is unpickled (train/evaluation/safe_zip.py): a policy file cannot run code on load
     model = load_sb3_model(path, algo if algo in ALGOS else None, device=device, label=repr(spec))
+    from ..recurrent import chain_resets, model_policy
 
-    def act(obs: np.ndarray) -> np.ndarray:
-        return model.predict(obs, deterministic=True)[0]
-
-    reset = None
+    # a recurrent policy's reset(n_rows) starts its LSTM state, carried across the decisions of an episode batch
+    act, reset = model_policy(model)
     try:
         layout = policy_layout(meta)
     except (TypeError, ValueError) as exc:
@@ -168,7 +168,8 @@ def load_policy(spec: str, *, action_mode: str | None = None, name: str | None =
         from ..sb3.residual import residual_policy
 
         try:
-            act, reset = residual_policy(act, meta["residual_on"], layout=layout)
+            act, agent_reset = residual_policy(act, meta["residual_on"], layout=layout)
+            reset = chain_resets(reset, agent_reset)
         except ValueError as exc:
             raise ValueError(f"policy {spec!r}: its metadata's {exc}") from None
     if meta.get("action_guard"):  # trained with the separation guard in the loop: it is part of the policy

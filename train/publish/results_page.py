@@ -114,7 +114,8 @@ def _label(group: str, task: str) -> str:
         return CLASSICAL[group]
     if group in CEILINGS:
         return CEILINGS[group]
-    m = re.match(r"(.+)_(ppo|mappo|sac|td3|recurrent_ppo)_(setpoints|residual|surfaces)$", group)
+    # the shortest task prefix: "vee5_recurrent_ppo_setpoints" is recurrent PPO on vee5, not PPO on "vee5_recurrent"
+    m = re.match(r"(.+?)_(ppo|mappo|sac|td3|recurrent_ppo)_(setpoints|residual|surfaces)$", group)
     if m is None:
         return group
     trained_on, algo = m.group(1), m.group(2)

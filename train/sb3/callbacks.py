@@ -87,13 +87,15 @@ def build_callbacks(cfg: TrainConfig, run_dir: Path, state: dict, log: Callable[
             return True
 
         def evaluate(self) -> None:
+            from ..recurrent import chain_resets, model_policy
+
             model = self.model
-            act = lambda o: model.predict(o, deterministic=True)[0]  # noqa: E731
-            reset = None
+            act, reset = model_policy(model)  # a recurrent model's LSTM state carried across the decisions
             if cfg.residual_on is not None:
                 from .residual import residual_policy
 
-                act, reset = residual_policy(act, cfg.residual_on, layout=self.layout)
+                act, agent_reset = residual_policy(act, cfg.residual_on, layout=self.layout)
+                reset = chain_resets(reset, agent_reset)
             if cfg.action_guard:
                 from .guard import guarded
 

@@ -54,6 +54,10 @@ def default_run_dir(scenario: str, algo: str, action_mode: str, seed: int, root:
 
 
 def _algo_class(algo: str):
+    if algo == "recurrent_ppo":  # sb3-contrib only where asked for: the other algorithms run without it
+        from ..recurrent import recurrent_ppo_class
+
+        return recurrent_ppo_class()
     from stable_baselines3 import PPO, SAC, TD3
 
     return {"ppo": PPO, "sac": SAC, "td3": TD3}[algo]
