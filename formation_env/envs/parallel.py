@@ -20,10 +20,10 @@ import numpy as np
 from gymnasium import spaces
 from pettingzoo import ParallelEnv
 
-from ..sim import Simulation
 from ..sim.validation import check_action, check_seed
 from ..sim.validation import clipped_values as _clipped_values
 from ..tasks import make_config
+from ..tasks.terms import task_simulation
 from .config import EnvConfig
 from .observations import OBS_CLIP, group_sizes, to_dict
 
@@ -61,7 +61,9 @@ class FormationParallelEnv(ParallelEnv):
         if render_mode is not None and render_mode not in self.metadata["render_modes"]:
             raise ValueError(f"render_mode must be one of {self.metadata['render_modes']} or None, got {render_mode!r}")
         self.render_mode = render_mode
-        self.sim = Simulation(self.config, batch_size=1)  # the episode's state lives there, nowhere else
+        # the episode's state lives there, nowhere else (with the task's Python terms composed after the step)
+        self.sim = task_simulation(self.config, batch_size=1)
+        self._out = None  # the last reset's or step's output
         n = self.sim.n_vehicles
         self.agent_indices = self.sim.agent_indices
         self.substeps = self.sim.substeps
@@ -70,8 +72,9 @@ class FormationParallelEnv(ParallelEnv):
         self._agent_set = frozenset(self.possible_agents)
         self.agents: list[str] = []
         if self.config.obs_mode == "dict":
+            groups = group_sizes(n, self.sim.neighbour_count, self.sim.neighbour_wind, self.sim.neighbour_attitude)
             self._obs_space = spaces.Dict({k: spaces.Box(-OBS_CLIP, OBS_CLIP, (s,), dtype=np.float32)
-                                           for k, s in group_sizes(n, self.sim.neighbour_count, self.sim.neighbour_wind, self.sim.neighbour_attitude).items() if s})
+                                           for k, s in {**groups, **self._python_groups()}.items() if s})
         else:
             self._obs_space = spaces.Box(-OBS_CLIP, OBS_CLIP, (self.sim.obs_size,), dtype=np.float32)
         self._act_space = spaces.Box(-1.0, 1.0, (4,), dtype=np.float32)
@@ -109,7 +112,7 @@ class FormationParallelEnv(ParallelEnv):
             # Gymnasium's convention: a seed also seeds the stream later unseeded resets draw from, so a
             # trainer that seeds only the first reset (RLlib's env runners do) replays exactly.
             self._entropy = np.random.SeedSequence(int(seed))
-        self.sim.reset(seeds=[int(seed)], options=sim_options)
+        self._out = self.sim.reset(seeds=[int(seed)], options=sim_options)
         self._was_reset = True
         self.agents = list(self.possible_agents)
         return self._observations(), self._infos()
@@ -120,7 +123,7 @@ class FormationParallelEnv(ParallelEnv):
         if not self.agents:
             raise RuntimeError("step() called on a finished episode; call reset() first")
         act = self._validate_actions(actions)
-        out = self.sim.step(act[None])
+        out = self._out = self.sim.step(act[None])
         rewards_all, done, trunc = out.reward, bool(out.terminated[0]), bool(out.truncated[0])
         obs = self._observations()
         infos = self._infos()
@@ -136,7 +139,7 @@ class FormationParallelEnv(ParallelEnv):
 
     def state(self) -> np.ndarray:
         """Global state: every UAV's observation vector, concatenated (float32)."""
-        return self.sim.output.observation[0].reshape(-1).astype(np.float32)
+        return self._out.observation[0].reshape(-1).astype(np.float32)
 
     def render(self):
         if self.render_mode is None:
@@ -174,10 +177,25 @@ class FormationParallelEnv(ParallelEnv):
                 act[k] = check_action(agent, actions[agent])
         return act
 
+    def _python_groups(self) -> dict:
+        """The task's Python observation groups (after the compiled ones): name -> size."""
+        terms = getattr(self.sim, "terms", None)
+        return {t.name: t.size for t in terms.observations} if terms is not None else {}
+
     def _observations(self) -> dict:
-        allobs = self.sim.output.observation[0].astype(np.float32)
-        n = self.sim.n_vehicles
-        return {a: to_dict(allobs[i], n, self.sim.neighbour_count, self.sim.neighbour_wind, self.sim.neighbour_attitude) if self.config.obs_mode == "dict" else allobs[i] for a, i in self._index.items()}
+        allobs = self._out.observation[0].astype(np.float32)
+        if self.config.obs_mode != "dict":
+            return {a: allobs[i] for a, i in self._index.items()}
+        n, sim = self.sim.n_vehicles, self.sim
+        start = getattr(sim, "compiled_obs_size", sim.obs_size)
+        out = {}
+        for a, i in self._index.items():
+            groups = to_dict(allobs[i], n, sim.neighbour_count, sim.neighbour_wind, sim.neighbour_attitude)
+            k = start
+            for name, size in self._python_groups().items():
+                groups[name], k = allobs[i, k:k + size], k + size
+            out[a] = groups
+        return out
 
     def _infos(self) -> dict:
         per_vehicle = self.sim.infos(0)

@@ -43,7 +43,7 @@ from ...rollout import Recorder, RolloutResult
 from ...scenarios import AEROSONDE_SPAN_M
 from ...sim.energy import ENERGY_COLUMNS
 
-__all__ = ["WakeSurfingRecorder", "episode_metrics", "longest_run", "WINDOW_S"]
+__all__ = ["WakeSurfingRecorder", "WakeSurfingMetrics", "METRICS", "episode_metrics", "longest_run", "WINDOW_S"]
 
 WINDOW_S = 1.0  # the saving is averaged over this before the 80 % test
 
@@ -139,3 +139,20 @@ def episode_metrics(rec: WakeSurfingRecorder, result: RolloutResult, keep_series
                            "reference_vertical_b": np.asarray(ref["z_b"]).tolist()}
         out.append(m)
     return out
+
+
+class WakeSurfingMetrics:
+    """The task's metrics as :attr:`formation_env.tasks.Task.metrics` holds them: ``recorder()``, then
+    ``episodes(recorder, result)`` (:func:`episode_metrics`)."""
+
+    def recorder(self) -> WakeSurfingRecorder:
+        return WakeSurfingRecorder()
+
+    def episodes(self, recorder: WakeSurfingRecorder, result: RolloutResult, keep_series: bool = False) -> list[dict]:
+        return episode_metrics(recorder, result, keep_series=keep_series)
+
+    def __repr__(self) -> str:
+        return "WakeSurfingMetrics()"
+
+
+METRICS = WakeSurfingMetrics()
