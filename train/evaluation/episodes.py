@@ -10,7 +10,7 @@ import numpy as np
 
 from formation_env.rollout import Recorder
 from formation_env.sim.energy import ENERGY_COLUMNS
-from formation_env.tasks.wake_surfing.metrics import longest_run
+from formation_env.tasks.evaluation import longest_run
 
 from .summary import PER_UAV_PREFIX
 

@@ -42,19 +42,11 @@ from ...frames import ned_to_track_frame
 from ...rollout import Recorder, RolloutResult
 from ...scenarios import AEROSONDE_SPAN_M
 from ...sim.energy import ENERGY_COLUMNS
+from ..evaluation import longest_run
 
 __all__ = ["WakeSurfingRecorder", "WakeSurfingMetrics", "METRICS", "episode_metrics", "longest_run", "WINDOW_S"]
 
 WINDOW_S = 1.0  # the saving is averaged over this before the 80 % test
-
-
-def longest_run(flags: np.ndarray) -> int:
-    """Length of the longest run of True in a 1-D bool array."""
-    best = run = 0
-    for f in flags:
-        run = run + 1 if f else 0
-        best = max(best, run)
-    return best
 
 
 class WakeSurfingRecorder(Recorder):
