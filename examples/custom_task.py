@@ -48,7 +48,8 @@ class FuelFlowSaving:
         self.state = weakref.WeakKeyDictionary()  # simulation -> its previous fuel, decision time and saving
 
     def reset(self, sim, indices) -> None:
-        st = self.state.setdefault(sim, {"fuel": sim.aircraft[:, :, 13].copy(), "saving": np.zeros(sim.aircraft.shape[:2])})
+        fuel = sim.aircraft[:, :, 13]  # kg, every UAV (the state's fuel column)
+        st = self.state.setdefault(sim, {"fuel": fuel.copy(), "saving": np.zeros_like(fuel)})
         st["fuel"][indices] = sim.aircraft[indices, :, 13]
         st["saving"][indices] = 0.0
         st["time"] = sim.time_s.copy()

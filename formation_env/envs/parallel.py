@@ -139,7 +139,9 @@ class FormationParallelEnv(ParallelEnv):
 
     def state(self) -> np.ndarray:
         """Global state: every UAV's observation vector, concatenated (float32)."""
-        return self._out.observation[0].reshape(-1).astype(np.float32)
+        obs = self._out.observation if self._out is not None else \
+            getattr(self.sim, "observation", self.sim.output.observation)  # before any reset: the initial arrays
+        return obs[0].reshape(-1).astype(np.float32)
 
     def render(self):
         if self.render_mode is None:
