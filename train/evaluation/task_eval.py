@@ -106,8 +106,8 @@ def evaluate_task(policies, *, scenario: str, episodes: int = 100, seeds=None, c
         t0 = time.perf_counter()
         episodes_by[c.name] = fly(scenario, c, seeds, config=config)
         s = ev.summarise(episodes_by[c.name], stats, n_boot=n_boot)
-        log(f"{c.name}: " + ", ".join(f"{k} {v:.4g}" for k, v in s.items() if isinstance(v, float))[:200]
-            + f" ({time.perf_counter() - t0:.0f} s)")
+        head = [f"{k} {v:.4g}" for k, v in s.items() if isinstance(v, float)][:4]
+        log(f"{c.name}: " + ", ".join(head) + f" ({time.perf_counter() - t0:.0f} s)")
     specs = {c.name: str(p) for c, p in zip(controllers[n_base:], policies)}
     return task_report(task, episodes_by, names, scenario=scenario, seeds=seeds, randomisation=config.randomisation,
                        policy_specs=specs, n_boot=n_boot)
