@@ -115,6 +115,9 @@ class ObservationLayout:
 
     neighbours: int | None = None
     optional: tuple[str, ...] = ()
+    #: a task's Python observation groups (:class:`formation_env.tasks.terms.ObservationTerm`), (name, size) pairs
+    #: appended after the compiled ones
+    extra: tuple[tuple[str, int], ...] = ()
 
     def __post_init__(self) -> None:
         k = self.neighbours
@@ -123,6 +126,22 @@ class ObservationLayout:
                 raise ValueError(f"ObservationLayout: neighbours must be None or an integer >= 0, got {k!r}")
             object.__setattr__(self, "neighbours", int(k))
         object.__setattr__(self, "optional", _optional_names(self.optional))
+        extra = tuple((str(n), int(s)) for n, s in self.extra)
+        clash = [n for n, s in extra if n in _BY_NAME or s < 1] + [n for i, (n, _) in enumerate(extra)
+                                                                   if n in [m for m, _ in extra[:i]]]
+        if clash:
+            raise ValueError(f"ObservationLayout: a task's observation groups must have new names and sizes >= 1; "
+                             f"{clash} do not")
+        object.__setattr__(self, "extra", extra)
+
+    def with_extra(self, groups) -> ObservationLayout:
+        """This layout with a task's Python groups ((name, size) pairs) appended after the compiled ones."""
+        return ObservationLayout(self.neighbours, self.optional, tuple(groups))
+
+    @property
+    def compiled_size(self) -> int:
+        """Length of the part of the observation the compiled step writes (the groups before ``extra``)."""
+        return self.size - sum(s for _, s in self.extra)
 
     # ------------------------------------------------------------------ construction
     @classmethod
@@ -164,10 +183,14 @@ class ObservationLayout:
         if not isinstance(data, Mapping) or "groups" not in data:
             raise ValueError(f"observation layout must be a mapping with 'neighbours' and 'groups', got {data!r}")
         recorded = [(str(name), int(size)) for name, size in data["groups"]]
-        unknown = [name for name, _ in recorded if name not in _BY_NAME]
+        n_declared = len(recorded)
+        while n_declared and recorded[n_declared - 1][0] not in _BY_NAME:
+            n_declared -= 1  # a task's Python groups come last
+        unknown = [name for name, _ in recorded[:n_declared] if name not in _BY_NAME]
         if unknown:
             raise ValueError(f"observation layout names groups this version does not declare: {unknown}")
-        layout = cls(data.get("neighbours"), tuple(n for n, _ in recorded if _BY_NAME[n].option))
+        layout = cls(data.get("neighbours"), tuple(n for n, _ in recorded[:n_declared] if _BY_NAME[n].option),
+                     tuple(recorded[n_declared:]))
         if layout.neighbours is not None and list(layout.groups.items()) != recorded:
             raise ValueError(f"observation layout {recorded} differs from this version's for the same groups "
                              f"{list(layout.groups.items())}")
@@ -198,8 +221,8 @@ class ObservationLayout:
     def groups(self) -> dict[str, int]:
         """Name -> size of every group this layout holds, in order (the ``neighbours`` group even when 0)."""
         k = self._fixed("groups")
-        return {g.name: g.size * k if g.per_neighbour else g.size for g in GROUPS
-                if g.option is None or g.name in self.optional}
+        return {**{g.name: g.size * k if g.per_neighbour else g.size for g in GROUPS
+                   if g.option is None or g.name in self.optional}, **dict(self.extra)}
 
     @property
     def size(self) -> int:
@@ -231,6 +254,7 @@ class ObservationLayout:
         length alone does not say which optional groups it holds: 47 + 6 x 3 = 47 + 9 x 2, so they come from
         here); a ValueError naming ``owner`` when no number fits (at least one neighbour with optional groups)."""
         base = sum(g.size for g in GROUPS if not g.per_neighbour and (g.option is None or g.name in self.optional))
+        base += sum(s for _, s in self.extra)
         per = sum(g.size for g in GROUPS if g.per_neighbour and (g.option is None or g.name in self.optional))
         k, rem = divmod(int(size) - base, per)
         low = 1 if self.optional else 0
@@ -239,4 +263,4 @@ class ObservationLayout:
                 raise ValueError(f"{owner}: observation length {size} matches no formation size")
             raise ValueError(f"{owner}: observation length {size} is not that of an observation with "
                              f"{' and '.join(self.optional)} ({base} + {per} k, k >= 1)")
-        return ObservationLayout(k, self.optional)
+        return ObservationLayout(k, self.optional, self.extra)

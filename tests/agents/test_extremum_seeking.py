@@ -1,6 +1,8 @@
 """The extremum-seeking baseline (agents.extremum_seeking): it converges on the optimum in calm air,
 its gradient estimate has the right sign, and its set-point stays in the safe box."""
 
+from functools import partial
+
 import numpy as np
 import pytest
 
@@ -11,7 +13,9 @@ from formation_env.tasks import make_config
 from formation_env.scenarios import get_scenario
 from formation_env.sim.params import setpoint_ranges, setpoint_speed_range
 from formation_env.tasks.wake_surfing.optimum import reference_optimum, saving_in_crosswind
-from train.evaluation.wake_surfing_rollout import fly
+from train.evaluation.task_eval import fly as _fly
+
+fly = partial(_fly, "wake_surfing")
 
 B = 2.9
 SC = get_scenario("wake_surfing")

@@ -239,3 +239,46 @@ def test_rllib_vee5(workdir):
 def test_rllib_vee5_env_runners_ignore_the_users_train_py(workdir):
     out = _run_rllib(workdir, "--env-runners", "1")
     assert re.search(r"RLlib: 1 iterations, [\d,]+ env steps", out)
+
+
+def code_lines(path: Path) -> int:
+    """Lines of code: not blank, not a comment, not inside a docstring (module, class or function)."""
+    import ast
+    import io
+    import tokenize
+
+    text = path.read_text()
+    doc_lines = set()
+    for node in ast.walk(ast.parse(text)):
+        if isinstance(node, (ast.Module, ast.ClassDef, ast.FunctionDef, ast.AsyncFunctionDef)) and node.body:
+            first = node.body[0]
+            if isinstance(first, ast.Expr) and isinstance(getattr(first, "value", None), ast.Constant) \
+                    and isinstance(first.value.value, str):
+                doc_lines.update(range(first.lineno, first.end_lineno + 1))
+    code = set()
+    for tok in tokenize.generate_tokens(io.StringIO(text).readline):
+        if tok.type not in (tokenize.COMMENT, tokenize.NL, tokenize.NEWLINE, tokenize.INDENT, tokenize.DEDENT,
+                            tokenize.ENDMARKER):
+            code.update(range(tok.start[0], tok.end[0] + 1))
+    return len(code - doc_lines)
+
+
+def test_custom_task_is_one_short_file_without_compiled_code():
+    """examples/custom_task.py: <= 120 lines of code (blank, comment and docstring lines not counted), no numba,
+    and its terms are Python: the package's kernel sources are not among the files it touches."""
+    path = EXAMPLES / "custom_task.py"
+    assert code_lines(path) <= 120
+    assert "numba" not in path.read_text()
+
+
+def test_custom_task(workdir):
+    """The task of one's own: registered with its Gymnasium id, its Python reward term in the info and its
+    observation group at the end of the observation, PPO trained for 2,048 steps on it, and the evaluation's
+    episodes carrying its metric for the policy and the thesis PID."""
+    out = run_example("custom_task.py", workdir, "--out", "run", timeout=600)
+    assert re.search(r"^custom/FuelSlot-v0: observation \d+ \(the last: the fuel-flow saving [+-]\d\.\d{3}\), reward "
+                     r"[+-]\d+\.\d{3} of which fuel_flow_saving [+-]\d\.\d{3}$", out, re.M), out[-3000:]
+    assert "trained 2,048 steps" in out and (workdir / "run" / "model.zip").is_file()
+    rows = dict(re.findall(r"^(model|pid): fuel-flow saving ([+-]\d\.\d{3}) \(mean of 4 episodes\)", out, re.M))
+    assert set(rows) == {"model", "pid"}, out[-3000:]
+    assert all(-1.0 <= float(v) <= 1.0 for v in rows.values())

@@ -10,7 +10,7 @@ import numpy as np
 
 from formation_env.rollout import Recorder
 from formation_env.sim.energy import ENERGY_COLUMNS
-from formation_env.tasks.wake_surfing.metrics import longest_run
+from formation_env.tasks.evaluation import longest_run
 
 from .summary import PER_UAV_PREFIX
 
@@ -170,14 +170,17 @@ def run_episodes(policy, config, seeds: Sequence[int], *, keep_series: bool = Fa
     protocol) and return the per-episode metrics (the module's table); ``recorders``: more
     :class:`formation_env.rollout.Recorder` s to see the same rollout."""
     from formation_env.rollout import rollout
-    from formation_env.sim import Simulation
+    from formation_env.tasks.terms import task_simulation, task_terms
 
     seeds = [int(s) for s in seeds]
     if not seeds:
         raise ValueError("seeds must not be empty")
-    sim = Simulation(config, batch_size=len(seeds))
+    sim = task_simulation(config, batch_size=len(seeds))  # a task's Python terms composed after the step
     rec = _EpisodeSeries(config)
-    res = rollout(sim, policy, seeds, recorders=[rec, *recorders])
+    terms = task_terms(config.scenario)
+    term_metrics = terms.episode_metrics() if terms is not None else None  # a task's Python metric terms
+    term_rec = [term_metrics.recorder()] if term_metrics is not None else []
+    res = rollout(sim, policy, seeds, recorders=[rec, *term_rec, *recorders])
     sc, agents = sim.scenario, rec.agents
     b, a_n = rec.shape
     has_box = sc.safe_box_b is not None
@@ -274,6 +277,9 @@ def run_episodes(policy, config, seeds: Sequence[int], *, keep_series: bool = Fa
                 settle = t[outside[-1] + 1] if len(outside) else t[0]
                 m["reconfig_time_s"] = float(settle - schedule_start)
         out.append(m)
+    if term_rec:  # the task's own columns beside the generic ones
+        for m, extra in zip(out, term_metrics.episodes(term_rec[0], res)):
+            m.update({k: v for k, v in extra.items() if k != "seed"})
     if keep_series:
         for i, m in enumerate(out):
             if sim.benefit_enabled:

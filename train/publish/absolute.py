@@ -5,8 +5,9 @@ The seed is chosen by the task's headline metric at its headline turbulence leve
 method's committed record, with the results page's estimator (the IQM; the mean for a 0/1 success). It is then
 flown on :data:`ABSOLUTE_EPISODES` further held-out episodes, the seeds ``seed_base + 100`` on (disjoint from the
 episodes that chose it, so the choice does not bias the figure), with the task's own evaluation protocol: the
-generic evaluation (:func:`train.evaluation.evaluate.evaluate`, the saving computed) or, for a task whose
-evaluation measures each episode against its own reference optimum, that task's rollout. The record,
+generic evaluation (:func:`train.evaluation.evaluate.evaluate`, the saving computed) or, for a task with its own
+evaluation (``Task.evaluator``: each episode measured against its reference optimum), that task's flight
+(:func:`train.evaluation.task_eval.fly`). The record,
 ``train/policies/<task>_absolute.json``, holds one entry per method: the seed chosen and why, the command, and
 the per-episode columns; the results page computes every number it shows from them.
 
@@ -111,12 +112,10 @@ def absolute_record(task_name: str, group: str, *, episodes: int = ABSOLUTE_EPIS
     first = ev.seed_base + ABSOLUTE_SEED_OFFSET
     seeds = [first + i for i in range(episodes)]
     rel = zip_path.relative_to(rp.REPO)
-    if ev.preset is not None and task_name.startswith("wake_surfing"):
-        from train.evaluation.episodes import eval_env_config
-        from train.evaluation.wake_surfing_rollout import fly, sb3_surfer
+    if task.evaluator is not None:  # the task's own evaluation: each episode against its reference optimum
+        from train.evaluation.task_eval import fly, policy_from_zip
 
-        config = eval_env_config(task_name, "setpoints")  # the task's preset, at its own (headline) level
-        eps = fly(sb3_surfer(str(zip_path)), seeds, config=config, keep_series=False)
+        eps = fly(task_name, policy_from_zip(str(zip_path)), seeds)  # the task's preset, at its own level
         command = f"formation-env results --absolute {task_name}"
     else:
         from train.evaluation.evaluate import evaluate

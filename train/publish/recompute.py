@@ -30,13 +30,26 @@ from ..evaluation.comparisons import comparisons, group_report
 from ..evaluation.marl_eval import marl_eval_data, training_steps, write_marl_eval
 from ..evaluation.stats import N_BOOT
 from ..evaluation.summary import summarise
-from ..evaluation.wake_surfing_eval import BASELINE_NAMES, summarise_surfer, surfing_comparisons, surfing_groups
+from ..evaluation import stats as _stats
+from ..evaluation.task_eval import task_groups
 from . import publish
 
 TASKS = ("formation_keeping", "close_formation", "reconfiguration", "wake_surfing")
 #: the task's headline score in the cross-task table (normalised by :func:`normalised_score`)
 HEADLINE = {"formation_keeping": "rms_slot_error_m", "close_formation": "rms_slot_error_m",
             "reconfiguration": "reconfig_success", "wake_surfing": "saving_ratio"}
+
+
+def _evaluator(task: str):
+    """The task's own evaluation hooks (None: the generic evaluation's record)."""
+    from formation_env.tasks import get_task
+
+    return get_task(task).evaluator
+
+
+def _own_policies(rec: dict, eps: dict) -> list[str]:
+    """The policies of a task-evaluation record (its ``policy_specs``: neither a baseline nor a ceiling)."""
+    return [n for n in eps if n in rec["policy_specs"]]
 
 
 def record_path(task: str) -> Path:
@@ -51,10 +64,11 @@ def _episodes(rec: dict) -> dict[str, list[dict]]:
 def recompute_statistics(task: str, rec: dict, *, n_boot: int = N_BOOT, seed: int = 0) -> dict:
     """The record's summaries and paired comparisons (and seed groups) recomputed from its episodes."""
     eps = _episodes(rec)
-    if task == "wake_surfing":
-        names = [n for n in eps if n not in BASELINE_NAMES and not n.startswith("oracle")]
-        return {"controllers": {n: {"summary": summarise_surfer(e, n_boot=n_boot, seed=seed)} for n, e in eps.items()},
-                "comparisons": surfing_comparisons(eps, names, n_boot=n_boot, seed=seed)}
+    ev = _evaluator(task)
+    if ev is not None:  # a task with its own evaluation: its hooks' statistics
+        names = _own_policies(rec, eps)
+        return {"controllers": {n: {"summary": ev.summarise(e, _stats, n_boot=n_boot, seed=seed)} for n, e in eps.items()},
+                "comparisons": ev.comparisons(eps, names, _stats, n_boot=n_boot, seed=seed)}
     baselines = rec["baselines"]
     cands = [n for n in eps if n not in baselines.values()]
     base_eps = {b: eps[b] for b in baselines.values()}
@@ -135,9 +149,9 @@ def _step_counts(names) -> dict[str, int]:
 def task_aggregates(task: str, rec: dict, *, n_boot: int, seed: int = 0) -> tuple[dict, dict, dict]:
     """(aggregates, groups, marl-eval dict) of one record."""
     eps = _episodes(rec)
-    if task == "wake_surfing":
-        names = [n for n in eps if n not in BASELINE_NAMES and not n.startswith("oracle")]
-        groups, baselines = surfing_groups(names), list(BASELINE_NAMES)
+    ev = _evaluator(task)
+    if ev is not None:
+        groups, baselines = task_groups(_own_policies(rec, eps)), list(ev.baseline_names)
     else:
         groups = {g: r["policies"] for g, r in rec.get("groups", {}).items()}
         baselines = list(rec["baselines"].values())
