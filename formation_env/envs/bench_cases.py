@@ -69,7 +69,7 @@ def _vector(case: dict, budget_s: float, repeats: int) -> dict:
     if case.get("benefit"):
         opts["compute_benefit"] = True
     if case.get("turbulence"):
-        from formation_env.envs.config import Randomisation
+        from formation_env.sim.config import Randomisation
 
         opts["turbulence_field"] = case["turbulence"]
         opts["randomisation"] = Randomisation(turbulence_sigma_mps=case.get("sigma", 1.0))

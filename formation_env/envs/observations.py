@@ -33,7 +33,7 @@ slot_schedule               10      spans, slog, /10  b, m/s, s  the slot offset
                                                                  the next keyframe (min(t, 10 s) / 10; 1 when none
                                                                  is left); zeros and 1 for vehicle 0
 controller_state            7       slog 1            SI         the PID's integrators and washout state
-                                                                 (agents.fcs CSTATE_NAMES; 0 when the PID is off)
+                                                                 (formation_env.control CSTATE_NAMES; 0 when the PID is off)
 neighbours                  6(V-1)  slog 3 m, 1 m/s   m, m/s     each other UAV (index order): relative position, then
                             or 6k                                relative velocity, in the agent's slot frame; with
                                                                  ``neighbour_count`` k: the k UAVs whose slots are

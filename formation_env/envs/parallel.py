@@ -24,7 +24,7 @@ from ..sim import Simulation
 from ..sim.validation import check_action, check_seed
 from ..sim.validation import clipped_values as _clipped_values
 from ..tasks import make_config
-from .config import EnvConfig
+from ..sim.config import EnvConfig
 from .observations import OBS_CLIP, group_sizes, to_dict
 
 __all__ = ["FormationParallelEnv", "make_config", "check_action", "reset_options", "IGNORED_RESET_OPTIONS"]

@@ -28,7 +28,7 @@ from stable_baselines3.common.vec_env.base_vec_env import VecEnv
 
 from ..sim import Simulation
 from ..sim.validation import MAX_SEED, check_actions, check_count, check_seed
-from .config import EnvConfig
+from ..sim.config import EnvConfig
 from .observations import OBS_CLIP
 from ..tasks import make_config
 

@@ -1,7 +1,7 @@
 """What limits close-formation station keeping (issue 24): the station keeper flown with what a real controller
 does not have, on the same episodes as the plain keeper.
 
-* **Thrust** (``--throttle-max`` of ``formation-env evaluate``; :class:`formation_env.envs.config.EnvConfig`): the
+* **Thrust** (``--throttle-max`` of ``formation-env evaluate``; :class:`formation_env.sim.config.EnvConfig`): the
   flight control's throttle ceiling raised for every UAV, a counterfactual engine. Any policy flies it.
 * **Decision rate**: the keeper deciding at 25 or 50 Hz instead of 10 (its gains are per second).
 * **Told the disturbance, its own gust** (:func:`wind_preview_keeper`): the keeper's ambient-wind feed-forwards

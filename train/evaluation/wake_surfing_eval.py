@@ -266,7 +266,7 @@ def plot_surfing_figure(path, policy_zip: str, *, es_gains=None, crosswind_mps: 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    from formation_env.envs.config import Randomisation
+    from formation_env.sim.config import Randomisation
     from formation_env.io import save_figure
     from formation_env.scenarios import get_scenario
     from formation_env.tasks.wake_surfing.optimum import reference_optimum, saving_in_crosswind
