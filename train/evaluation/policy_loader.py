@@ -8,6 +8,8 @@ from pathlib import Path
 
 import numpy as np
 
+from agents.registry import CLASSICAL_AGENTS, classical_agent
+
 from ..config import ACTION_MODES
 from .policy import EvalPolicy
 from ..sb3.config import ALGOS
@@ -17,31 +19,6 @@ __all__ = ["CLASSICAL_AGENTS", "classical_agent", "load_policy"]
 
 def _pid_policy() -> EvalPolicy:
     return EvalPolicy("pid", "residual", lambda obs: np.zeros((obs.shape[0], 4), dtype=np.float32))
-
-
-# the classical agents of the top-level ``agents`` package: spec -> (module, class), imported only when asked for
-CLASSICAL_AGENTS = {"pid_formation": ("agents.pid_formation", "PIDFormation"),
-                    "station_keeper": ("agents.station_keeper", "StationKeeper")}
-
-
-def classical_agent(spec: str, *, neighbour_wind: bool = False, neighbour_attitude: bool = False):
-    """A fresh instance of the classical agent ``spec`` of ``agents/`` (:data:`CLASSICAL_AGENTS`: ``pid_formation``,
-    the formation-keeping controller; ``station_keeper``, the cross-track station keeper), imported only here: a
-    stateful, batched agent (``reset(n_rows)``, ``act(obs)``, ``action_mode``, ``control_hz``); ``neighbour_wind``:
-    its observations carry the neighbours' winds (EnvConfig.neighbour_wind), which their length alone does not say;
-    ``neighbour_attitude`` their attitudes."""
-    import importlib
-
-    module, cls = CLASSICAL_AGENTS[spec]
-    try:
-        agent_class = getattr(importlib.import_module(module), cls)
-    except ModuleNotFoundError as exc:
-        if exc.name not in (module, "agents"):
-            raise
-        raise ValueError(f"policy {spec!r} needs {module.replace('.', '/')}.py, which this checkout does not have") from None
-    # the layout flag only where it is set: an agent class flown on plain observations takes no argument
-    flags = {k: True for k, on in (("neighbour_wind", neighbour_wind), ("neighbour_attitude", neighbour_attitude)) if on}
-    return agent_class(**flags)
 
 
 def _agent_policy(spec: str) -> EvalPolicy:

@@ -39,7 +39,7 @@ def check_residual_on(spec) -> dict:
 
 
 def _agent(spec: dict, neighbour_wind: bool = False, neighbour_attitude: bool = False):
-    from ..evaluation.policy_loader import classical_agent
+    from agents.registry import classical_agent
 
     # told the observation's layout
     agent = classical_agent(spec["agent"], neighbour_wind=neighbour_wind, neighbour_attitude=neighbour_attitude)
