@@ -16,7 +16,8 @@ import sys
 from ..errors import ClusterUnreachableError, MissingDependencyError, ShadowedPackageError
 from ._args import OneLineArgumentParser, check_out_path
 
-COMMANDS = ("verify", "bench", "demo", "trim", "modes", "run", "report", "replay", "train", "evaluate", "warmup", "docs", "results")
+COMMANDS = ("verify", "bench", "demo", "trim", "modes", "run", "report", "replay", "train", "evaluate", "warmup", "docs", "results",
+            "publish", "data")
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -106,7 +107,8 @@ def _main(argv: list[str] | None) -> int:
     except BrokenPipeError:
         raise
     except (ValueError, OSError, MissingDependencyError, ClusterUnreachableError) as exc:
-        print(f"formation-env {args.command}: error: {_one_line(exc)}", file=sys.stderr)
+        name = " ".join(n for n in (args.command, getattr(args, "action", None)) if n)  # e.g. "publish levels"
+        print(f"formation-env {name}: error: {_one_line(exc)}", file=sys.stderr)
         return 2
 
 

@@ -1,6 +1,7 @@
 """Benchmark cases on the public env API only, so the same file measures this checkout and an older
-one (``python -m formation_env.envs.bench_cases CASES_JSON`` with the older checkout first on
-``PYTHONPATH``; :mod:`formation_env.envs.bench` runs it both ways in the same session).
+one (:mod:`formation_env.envs.bench` runs a copy of this file as a script, ``bench_cases_script.py CASES_JSON``, with
+either checkout first on ``PYTHONPATH``, both in the same session; an older checkout has no ``formation-env``
+subcommand for it).
 
 A case is a dict: ``{"kind": "single", "mode": ..., "learning": ...}`` (PettingZoo parallel env,
 B = 1) or ``{"kind": "vector", "formations": B, "mode": ..., "learning": ..., "wake_update_every": k,
