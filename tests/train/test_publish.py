@@ -138,6 +138,12 @@ def test_publish_best_or_final_model(tmp_path, monkeypatch):
     assert meta["num_timesteps"] == 200 and meta["validation"]["num_timesteps"] == 200 and meta["note"]
     with pytest.raises(ValueError, match="model"):
         publish.publish(run, "c_seed3", model="last")
+    # the command line: `formation-env publish run RUN_DIR NAME`; an existing NAME is refused in one line
+    assert cli_main(["publish", "run", str(run), "d_seed3", "--model", "final", "--wall-s", "12.5",
+                     "--stopped-at", "200"]) == 0
+    meta = json.loads((out / "d_seed3.json").read_text())
+    assert (out / "d_seed3.zip").read_bytes() == b"final" and meta["wall_s"] == 12.5 and meta["run_steps"] == 200
+    assert cli_main(["publish", "run", str(run), "d_seed3"]) == 2
 
 
 def test_publish_names_the_guard_the_policy_flies_with(tmp_path, monkeypatch):
