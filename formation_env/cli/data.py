@@ -11,10 +11,13 @@ from pathlib import Path
 
 from ._args import OneLineArgumentParser, bounded_int
 
-# a task unit's optimum module -> its cache is rewritten by write_cache(path)
-OPTIMA = {"close_formation": "formation_env.tasks.close_formation.optimum",
-          "close_formations": "formation_env.tasks.close_formations.optimum",
-          "wake_surfing": "formation_env.tasks.wake_surfing.optimum"}
+_TASKS_DIR = Path(__file__).resolve().parents[1] / "tasks"
+
+
+def optimum_units() -> dict[str, str]:
+    """{task unit: its optimum module} for every task unit with an ``optimum.py`` (read off the files, so that
+    building the parser imports nothing); such a module rewrites its cache with ``write_cache(path)``."""
+    return {p.parent.name: f"formation_env.tasks.{p.parent.name}.optimum" for p in sorted(_TASKS_DIR.glob("*/optimum.py"))}
 
 
 def register(sub) -> None:
@@ -31,7 +34,8 @@ def register(sub) -> None:
     t.set_defaults(func=run_residual_table)
 
     o = actions.add_parser("optimum", help="rewrite a task's cached reference optimum")
-    o.add_argument("task", choices=tuple(OPTIMA), metavar="TASK", help=f"one of {list(OPTIMA)}")
+    units = optimum_units()
+    o.add_argument("task", choices=tuple(units), metavar="TASK", help=f"the task unit, one of {list(units)}")
     o.add_argument("--cache", default=None, metavar="PATH", help="where to write it (default the package's cache)")
     o.set_defaults(func=run_optimum)
 
@@ -55,7 +59,9 @@ def run_residual_table(args) -> int:
 
 
 def run_optimum(args) -> int:
-    module = importlib.import_module(OPTIMA[args.task])
+    module = importlib.import_module(optimum_units()[args.task])
+    if not callable(getattr(module, "write_cache", None)) or not hasattr(module, "CACHE_PATH"):
+        raise ValueError(f"{module.__name__} has no cache to rewrite (no write_cache and CACHE_PATH)")
     path = module.write_cache(args.cache or module.CACHE_PATH)
     print(f"wrote {path}")
     return 0
