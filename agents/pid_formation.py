@@ -36,7 +36,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from formation_env.envs.actions import SETPOINT_POSITION_SCALE_M, SETPOINT_SPEED_SCALE_MPS
+from formation_env.sim.params import SETPOINT_POSITION_SCALE_M, SETPOINT_SPEED_SCALE_MPS
 from formation_env.envs.observations import POSITION_SCALE_M, VELOCITY_SCALE_MPS, WIND_SCALE_MPS
 from formation_env.sim.layout import ObservationLayout
 

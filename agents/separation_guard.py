@@ -28,7 +28,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from formation_env.control.gains import TrackerGains
-from formation_env.envs.actions import SETPOINT_POSITION_SCALE_M, SETPOINT_SPEED_SCALE_MPS
+from formation_env.sim.params import SETPOINT_POSITION_SCALE_M, SETPOINT_SPEED_SCALE_MPS
 from formation_env.envs.observations import NEIGHBOUR_POSITION_SCALE_M, POSITION_SCALE_M
 from formation_env.sim.layout import ObservationLayout
 

@@ -7,8 +7,8 @@
 # the committed PPO policies: 100 held-out test episodes per turbulence level (sigma 0, 1, 1.5; close_formation also
 # 0.5, its protocol's), the three new seeds beside the three committed PPO seeds and the classical baselines in one
 # command per task (the same episodes: every comparison is paired; two tasks at a time), recorded with
-# train.publish.levels_record, and compared with PPO paired by episode on the task's headline metric
-# (train.publish.versus).
+# `formation-env publish levels`, and compared with PPO paired by episode on the task's headline metric
+# (`formation-env publish versus`).
 #
 # Run directories: RUNS/<task>_<algo>_seed<k> (log: RUNS/<task>_<algo>_seed<k>.log); published policies:
 # train/policies/<task>_<algo>_setpoints_seed<k>.{zip,json} with _curve.csv and _evaluations.json; evaluations:
@@ -95,16 +95,16 @@ eval_one() {  # one evaluation per task: SAC, recurrent PPO and PPO (3 seeds eac
   args+=" $(baselines_of "$task") --turbulence $(levels_of "$task") --episodes 100 --benefit --no-plots"
   # shellcheck disable=SC2086  # $args is a list of plain words
   NUMBA_NUM_THREADS=1 "$FE" evaluate $args --out "$dir" > "$dir.log" 2>&1
-  "$PY" -m train.publish.levels_record "$dir" "$P/${task}_algorithms_levels.json" \
+  "$FE" publish levels "$dir" "$P/${task}_algorithms_levels.json" \
     --command "formation-env evaluate $args --out DIR"
 }
 export -f eval_one levels_of baselines_of
-export P PY
+export P PY FE
 mkdir -p "$RUNS/eval"
 printf '%s\n' close_formation vee5 reconfiguration | xargs -P 2 -L 1 bash -c 'eval_one "$0"'
 for task in close_formation vee5 reconfiguration; do
   for algo in sac recurrent_ppo; do
-    "$PY" -m train.publish.versus "$P/${task}_algorithms_levels.json" "${task}_${algo}_setpoints" "${task}_ppo_setpoints" \
+    "$FE" publish versus "$P/${task}_algorithms_levels.json" "${task}_${algo}_setpoints" "${task}_ppo_setpoints" \
       "$P/${task}_${algo}_setpoints_versus_ppo.json"
   done
 done

@@ -82,7 +82,7 @@ def with_task_env(params: dict, scenario: str) -> dict:
 def env_departures(scenario: str, env_kwargs: dict) -> dict:
     """What ``env_kwargs`` (a run's) sets differently from the task's benchmark configuration ({}: the benchmark
     task itself), as a mapping of the options (and reward / randomisation fields) that differ."""
-    from formation_env.envs.config import EnvConfig, Randomisation, RewardWeights
+    from formation_env.sim.config import EnvConfig, Randomisation, RewardWeights
 
     base = task_env_kwargs(scenario)
     out = {}
@@ -142,7 +142,7 @@ def config_section(data: dict, scenario: str) -> dict:
 def env_config_for(scenario: str, action_mode: str, env_kwargs: dict, **overrides):
     """The EnvConfig of a scenario, action mode and ``env_kwargs`` mapping (the hyperparameter files'
     format; ``learning`` defaults to followers; flat observations). Shared by both backends."""
-    from formation_env.envs.config import EnvConfig, Randomisation, RewardWeights
+    from formation_env.sim.config import EnvConfig, Randomisation, RewardWeights
 
     if not isinstance(env_kwargs, dict):
         raise ValueError(f"env_kwargs must be a mapping of EnvConfig options, got {env_kwargs!r}")

@@ -1,6 +1,7 @@
 """Benchmark cases on the public env API only, so the same file measures this checkout and an older
-one (``python -m formation_env.envs.bench_cases CASES_JSON`` with the older checkout first on
-``PYTHONPATH``; :mod:`formation_env.envs.bench` runs it both ways in the same session).
+one (:mod:`formation_env.envs.bench` runs a copy of this file as a script, ``bench_cases_script.py CASES_JSON``, with
+either checkout first on ``PYTHONPATH``, both in the same session; an older checkout has no ``formation-env``
+subcommand for it).
 
 A case is a dict: ``{"kind": "single", "mode": ..., "learning": ...}`` (PettingZoo parallel env,
 B = 1) or ``{"kind": "vector", "formations": B, "mode": ..., "learning": ..., "wake_update_every": k,
@@ -69,7 +70,7 @@ def _vector(case: dict, budget_s: float, repeats: int) -> dict:
     if case.get("benefit"):
         opts["compute_benefit"] = True
     if case.get("turbulence"):
-        from formation_env.envs.config import Randomisation
+        from formation_env.sim.config import Randomisation
 
         opts["turbulence_field"] = case["turbulence"]
         opts["randomisation"] = Randomisation(turbulence_sigma_mps=case.get("sigma", 1.0))

@@ -7,7 +7,7 @@ result on the task is trained with); the learner is the task's ``gym_learner`` (
 single UAV of a one-UAV scenario), the other UAVs fly the thesis PID.
 
 Keyword arguments of ``gymnasium.make`` replace options of the benchmark configuration
-(:class:`~formation_env.envs.config.EnvConfig`, e.g. ``action_mode="residual"``, ``randomisation=Randomisation(...)``),
+(:class:`~formation_env.sim.config.EnvConfig`, e.g. ``action_mode="residual"``, ``randomisation=Randomisation(...)``),
 plus ``learner`` (the UAV
 index; ``learning=(i,)`` means the same) and ``render_mode``. An unknown keyword raises ``TypeError``,
 a bad value ``ValueError``. An id fixes its scenario: ``scenario=`` (or a ``config``) naming another one is a
@@ -19,7 +19,7 @@ from __future__ import annotations
 import gymnasium as gym
 import numpy as np
 
-from .config import EnvConfig
+from ..sim.config import EnvConfig
 from ..tasks import make_config
 from .parallel import FormationParallelEnv
 

@@ -27,7 +27,7 @@ from gymnasium.vector import AutoresetMode
 from stable_baselines3.common.vec_env.base_vec_env import VecEnv
 
 from ..sim.validation import MAX_SEED, check_actions, check_count, check_seed
-from .config import EnvConfig
+from ..sim.config import EnvConfig
 from .observations import OBS_CLIP
 from ..tasks import make_config
 from ..tasks.terms import task_simulation

@@ -281,7 +281,8 @@ class EnvConfig:
     scenario: a name from :func:`formation_env.scenarios.scenario_names`, or a Scenario object.
     learning: which UAVs are agents: "all", "followers" (vehicle 0 flies the PID baseline on its
         path: a scripted leader) or a tuple of vehicle indices.
-    action_mode: "surfaces" | "residual" | "setpoints" (see :mod:`formation_env.envs.actions`).
+    action_mode: "surfaces" | "residual" | "setpoints" (what each action means: the environments
+        page, "Action space"; the scales: :mod:`formation_env.sim.params`).
     control_hz: agent decision rate; the physics runs at 1 / scenario dt (50 Hz) and the action is
         held in between. Must divide the physics rate.
     wake: ELL wake coupling on or off (None: the scenario's default).

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from agents.extremum_seeking import ExtremumSeeking, ExtremumSeekingGains
-from formation_env.envs.config import Randomisation
+from formation_env.sim.config import Randomisation
 from formation_env.envs.observations import observation_size
 from formation_env.tasks import make_config
 from formation_env.scenarios import get_scenario
@@ -104,7 +104,7 @@ def test_keeper_inner_loop_holds_the_set_point_the_pid_inner_loop_is_kept():
     (observation's slot error = the set-point) its lateral and vertical actions are what it commands on the nominal slot
     with zero error, shifted by the set-point; ``inner="pid"`` is the issue-16 design (its own actions differ)."""
     from agents.station_keeper import StationKeeper
-    from formation_env.envs.actions import SETPOINT_POSITION_SCALE_M
+    from formation_env.sim.params import SETPOINT_POSITION_SCALE_M
     from formation_env.envs.observations import POSITION_SCALE_M, slog, to_dict
 
     agent, pid = _agent(gain_y=0.0, gain_z=0.0), _agent(gain_y=0.0, gain_z=0.0)

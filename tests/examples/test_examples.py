@@ -40,8 +40,7 @@ def workdir(tmp_path):
 
 def run_example(name: str, cwd: Path, *args: str, timeout: float = 300, env: dict | None = None) -> str:
     """``python examples/<name> --smoke ARGS`` run from ``cwd``; its output. Importing the working directory's
-    ``train.py`` or ``agents/`` is an AssertionError (what the strict xfails below expect), any other failure
-    ``pytest.fail``."""
+    ``train.py`` or ``agents/`` is an AssertionError, any other failure ``pytest.fail``."""
     env = {**os.environ, "PYTHONPATH": str(REPO), **(env or {})}
     env.pop("RAY_ADDRESS", None)
     r = subprocess.run([sys.executable, str(EXAMPLES / name), "--smoke", *args], cwd=cwd, env=env,
@@ -57,11 +56,10 @@ def _checked(r: subprocess.CompletedProcess, name: str) -> str:
     return out
 
 
-@pytest.mark.xfail(strict=True, raises=AssertionError, reason=(
-    "a script's own directory is first on sys.path: next to a user's train.py, `import train.evaluation` finds the "
-    "user's module (the packaging issue: top-level package names 'train' and 'agents')"))
 def test_an_example_copied_next_to_the_users_train_py_imports_the_project(workdir):
-    """A researcher copies an example into their own project, which has a train.py: ``--help`` runs the imports."""
+    """A researcher copies an example into their own project, which has a train.py: ``--help`` runs the imports.
+    The script's own directory is first on sys.path; ``import formation_env.own_packages`` binds ``train`` to the
+    project's package before the example imports it."""
     shutil.copy(EXAMPLES / "train_ppo_close_formation.py", workdir)
     env = {**os.environ, "PYTHONPATH": str(REPO)}
     r = subprocess.run([sys.executable, "train_ppo_close_formation.py", "--help"], cwd=workdir, env=env,
@@ -232,11 +230,10 @@ def test_rllib_vee5(workdir):
     assert re.search(r"formation saving \d\.\d{3}, collisions \d+/2$", out, re.M)
 
 
-@pytest.mark.xfail(strict=True, raises=AssertionError, reason=(
-    "Ray puts the driver's working directory on its workers' sys.path, so an env runner unpickling the env "
-    "(train.rllib.env.FormationMultiAgentEnv) imports the user's train.py instead of the project's train package "
-    "(the packaging issue: top-level package names 'train' and 'agents')"))
 def test_rllib_vee5_env_runners_ignore_the_users_train_py(workdir):
+    """Ray puts the driver's working directory first on its workers' sys.path; an env runner unpickling the env
+    (train.rllib.env.FormationMultiAgentEnv) still imports the project's train package (the workers' setup hook,
+    train.rllib.cluster.WORKER_RUNTIME_ENV)."""
     out = _run_rllib(workdir, "--env-runners", "1")
     assert re.search(r"RLlib: 1 iterations, [\d,]+ env steps", out)
 

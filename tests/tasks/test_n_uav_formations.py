@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 import formation_env
-from formation_env.envs.config import EnvConfig, Randomisation
+from formation_env.sim.config import EnvConfig, Randomisation
 from formation_env.scenarios import get_scenario
 from formation_env.sim import Simulation
 from formation_env.sim.observe import observation_size

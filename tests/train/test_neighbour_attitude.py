@@ -13,7 +13,7 @@ def test_the_classical_agents_read_the_attitudes_when_told():
     from agents.pid_formation import PIDFormation
     from agents.separation_guard import GuardGains, SeparationGuard
     from agents.station_keeper import StationKeeper
-    from formation_env.envs.config import Randomisation
+    from formation_env.sim.config import Randomisation
 
     layouts = [(False, False), (False, True), (True, True)]
     envs = [formation_env.parallel_env("echelon3", action_mode="setpoints", neighbour_wind=w, neighbour_attitude=t,

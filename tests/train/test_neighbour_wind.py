@@ -63,7 +63,7 @@ def test_a_run_with_a_neighbour_group_is_flown_with_it(tmp_path, tiny, monkeypat
 def _paired_observations(n_steps=12):
     """The same echelon3 flight observed without and with the neighbours' winds (sigma 1, followers pushed about)."""
     import formation_env
-    from formation_env.envs.config import Randomisation
+    from formation_env.sim.config import Randomisation
 
     envs = [formation_env.parallel_env("echelon3", action_mode="setpoints", neighbour_wind=w,
                                        randomisation=Randomisation(turbulence_sigma_mps=1.0, initial_offset_m=4.0))

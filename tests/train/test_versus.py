@@ -1,4 +1,4 @@
-"""``python -m train.publish.versus``: two seed groups of one levels record compared paired by episode on the task's
+"""``formation-env publish versus``: two seed groups of one levels record compared paired by episode on the task's
 headline metric (the difference of the seed-averaged episodes with its interval, and the probability of
 improvement)."""
 
@@ -24,7 +24,8 @@ def _record(scenario: str, key: str, cand, ref) -> dict:
 
 
 def test_versus_pairs_the_episodes_of_the_headline_metric(tmp_path, capsys):
-    from train.publish.versus import main, versus
+    from formation_env.cli import main
+    from train.publish.versus import versus
 
     rng = np.random.default_rng(0)
     base = rng.uniform(0.4, 0.8, 60)  # hard and easy episodes, shared by both groups
@@ -46,13 +47,13 @@ def test_versus_pairs_the_episodes_of_the_headline_metric(tmp_path, capsys):
 
     path = tmp_path / "rec.json"
     path.write_text(json.dumps(rec))
-    assert main([str(path), new, old, str(tmp_path / "o.json")]) == 0
+    assert main(["publish", "versus", str(path), new, old, str(tmp_path / "o.json")]) == 0
     assert "sigma_1: harvest_ratio" in capsys.readouterr().out
     assert json.loads((tmp_path / "o.json").read_text())["levels"]["sigma_1"]["better"]
     # one clear error, status 2: an unknown group, an existing output
-    assert main([str(path), "close_formation_sac_setpoints", old, str(tmp_path / "p.json")]) == 2
+    assert main(["publish", "versus", str(path), "close_formation_sac_setpoints", old, str(tmp_path / "p.json")]) == 2
     assert "no policy close_formation_sac_setpoints_seed<k>" in capsys.readouterr().err
-    assert main([str(path), new, old, str(tmp_path / "o.json")]) == 2
+    assert main(["publish", "versus", str(path), new, old, str(tmp_path / "o.json")]) == 2
 
 
 def test_versus_a_success_rate():

@@ -10,7 +10,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from formation_env.envs.config import Randomisation, RewardWeights
+from formation_env.sim.config import Randomisation, RewardWeights
 from formation_env.tasks.wake_surfing import WAKE_SURFING_RANDOMISATION, WAKE_SURFING_REWARD
 from train.sb3.config import load_hyperparams
 from train.evaluation.episodes import longest_run, eval_env_config

@@ -7,8 +7,9 @@ import json
 import numpy as np
 import pytest
 
+from formation_env.cli import main
 from formation_env.tasks import get_task
-from train.publish.records import group_levels, main
+from train.publish.records import group_levels
 
 EPISODE_COLUMNS = get_task("wake_surfing").evaluator.records.episode_columns
 
@@ -56,7 +57,9 @@ def test_group_levels_from_saved_episodes(tmp_path, group):
 
 
 def test_bad_input_is_one_line_and_exit_2(tmp_path, capsys):
-    assert main(["wake_surfing", str(tmp_path), str(tmp_path / "none_seed0.zip")]) == 2
-    assert main(["wake_surfing", str(tmp_path), str(tmp_path / "none_seed0.zip"), "--episodes", "0"]) == 2
+    assert main(["publish", "records", "wake_surfing", str(tmp_path), str(tmp_path / "none_seed0.zip")]) == 2
+    with pytest.raises(SystemExit) as exc:  # argparse's own exit, after its one line
+        main(["publish", "records", "wake_surfing", str(tmp_path), str(tmp_path / "none_seed0.zip"), "--episodes", "0"])
+    assert exc.value.code == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 2 and "does not exist" in err[0] and "--episodes" in err[1] and "Traceback" not in "".join(err)

@@ -40,11 +40,11 @@ def eval_env_config(scenario: str, action_mode: str, *, turbulence_sigma_mps: fl
     level). ``wake_fidelity`` None: the
     scenario's (formation_env.sim.formation.WAKE_FIDELITIES; a record flown before a task changed fidelity is re-flown
     with the fidelity it records). ``throttle_max``: the flight control's throttle ceiling (1: the Aerosonde's; above 1
-    the counterfactual engine of the ceiling measurements, :class:`formation_env.envs.config.EnvConfig`).
+    the counterfactual engine of the ceiling measurements, :class:`formation_env.sim.config.EnvConfig`).
     ``leader_reference``: "ground" or "air" (how vehicle 0's reference moves, EnvConfig.leader_reference); None the
     scenario's. ``observation``: the :class:`~formation_env.sim.layout.ObservationLayout` a policy was trained on (its
     optional groups switched on; None: none)."""
-    from formation_env.envs.config import EnvConfig, Randomisation
+    from formation_env.sim.config import EnvConfig, Randomisation
     from formation_env.tasks import task_for_scenario, task_learning
 
     if turbulence_field is None:

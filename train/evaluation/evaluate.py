@@ -114,7 +114,7 @@ def evaluate(policies: Sequence[str], *, scenario: str, episodes: int = TEST_EPI
     (:func:`comparisons`: every policy against each baseline evaluated with it), ``groups`` (seed groups:
     policies ``<name>_seed<k>`` and the ``groups`` argument {group: [policy names]}, see
     :func:`group_report`), ``statistics`` (how the intervals were computed) and the markdown tables."""
-    from formation_env.envs.config import EnvConfig
+    from formation_env.sim.config import EnvConfig
     from formation_env.scenarios import get_scenario, scenario_names
     from formation_env.sim.formation import WakeConfig, resolve_coupling, resolve_fidelity
 

@@ -8,6 +8,7 @@ from pathlib import Path
 
 import numpy as np
 
+from agents.registry import CLASSICAL_AGENTS, classical_agent
 from formation_env.sim.layout import ObservationLayout
 
 from ..config import ACTION_MODES
@@ -19,29 +20,6 @@ __all__ = ["CLASSICAL_AGENTS", "classical_agent", "load_policy", "policy_layout"
 
 def _pid_policy() -> EvalPolicy:
     return EvalPolicy("pid", "residual", lambda obs: np.zeros((obs.shape[0], 4), dtype=np.float32))
-
-
-# the classical agents of the top-level ``agents`` package: spec -> (module, class), imported only when asked for
-CLASSICAL_AGENTS = {"pid_formation": ("agents.pid_formation", "PIDFormation"),
-                    "station_keeper": ("agents.station_keeper", "StationKeeper")}
-
-
-def classical_agent(spec: str, *, layout: ObservationLayout | None = None):
-    """A fresh instance of the classical agent ``spec`` of ``agents/`` (:data:`CLASSICAL_AGENTS`: ``pid_formation``,
-    the formation-keeping controller; ``station_keeper``, the cross-track station keeper), imported only here: a
-    stateful, batched agent (``reset(n_rows)``, ``act(obs)``, ``action_mode``, ``control_hz``); ``layout``: the
-    observation layout its observations have (their optional groups, which their length alone does not say)."""
-    import importlib
-
-    module, cls = CLASSICAL_AGENTS[spec]
-    try:
-        agent_class = getattr(importlib.import_module(module), cls)
-    except ModuleNotFoundError as exc:
-        if exc.name not in (module, "agents"):
-            raise
-        raise ValueError(f"policy {spec!r} needs {module.replace('.', '/')}.py, which this checkout does not have") from None
-    # the layout only where it has optional groups: an agent class flown on plain observations takes no argument
-    return agent_class(layout=layout) if layout is not None and layout.optional else agent_class()
 
 
 def _agent_policy(spec: str) -> EvalPolicy:

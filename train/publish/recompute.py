@@ -3,7 +3,7 @@ estimators (SciPy for the per-policy and paired intervals, rliable for the aggre
 seeds x episodes), compare every interval with the one committed, and write the aggregates, the
 performance profiles and marl-eval JSON. Nothing is simulated again and nothing tracked is written.
 
-    python -m train.publish.recompute --out DIR [--n-boot 10000] [--noise-seeds 8]
+    formation-env publish recompute --out DIR [--n-boot 10000] [--noise-seeds 8]
 
 The Monte-Carlo noise of an interval end is the standard deviation of that end over ``--noise-seeds``
 recomputations with other bootstrap seeds (same estimator, same data); the committed end and the
@@ -16,7 +16,6 @@ z, the aggregates of each task, the cross-task aggregates), ``recompute.md`` (th
 
 from __future__ import annotations
 
-import argparse
 import json
 import math
 import sys
@@ -213,42 +212,34 @@ def markdown(result: dict) -> str:
     return "\n".join(lines) + "\n"
 
 
-def main(argv: list[str] | None = None) -> int:
-    ap = argparse.ArgumentParser(prog="python -m train.publish.recompute", description=__doc__.splitlines()[0])
-    ap.add_argument("--out", required=True, help="a new (or empty) directory for the outputs")
-    ap.add_argument("--n-boot", type=int, default=N_BOOT, help=f"bootstrap resamples (default {N_BOOT})")
-    ap.add_argument("--noise-seeds", type=int, default=8, help="recomputations that measure the Monte-Carlo noise")
-    ap.add_argument("--tasks", nargs="+", default=list(TASKS), choices=TASKS)
-    a = ap.parse_args(argv)
-    if a.n_boot < 100 or a.noise_seeds < 2:
-        print(f"{ap.prog}: error: need --n-boot >= 100 and --noise-seeds >= 2", file=sys.stderr)
-        return 2
+def recompute(out: str | Path, *, n_boot: int = N_BOOT, noise_seeds: int = 8, tasks=TASKS) -> int:
+    """``formation-env publish recompute``: the recomputation of the module docstring for ``tasks``, written to
+    ``out`` (a new or empty directory); ``n_boot`` >= 100 bootstrap resamples, ``noise_seeds`` >= 2 recomputations
+    that measure the Monte-Carlo noise. A bad value is a ValueError naming it, before anything is computed."""
+    unknown = [t for t in tasks if t not in TASKS]
+    if unknown:
+        raise ValueError(f"--tasks: unknown task(s) {unknown}; the committed records are {list(TASKS)}")
+    if n_boot < 100 or noise_seeds < 2:
+        raise ValueError(f"need --n-boot >= 100 and --noise-seeds >= 2, got {n_boot} and {noise_seeds}")
     from formation_env.io import atomic_write_json, atomic_write_text, prepare_output_dir
 
-    try:
-        out = prepare_output_dir(a.out)
-    except FileExistsError as exc:
-        print(f"{ap.prog}: error: {exc}", file=sys.stderr)
-        return 2
-    records = {t: json.loads(record_path(t).read_text()) for t in a.tasks}
-    result: dict = {"n_boot": a.n_boot, "noise_seeds": a.noise_seeds, "tasks": {}}
+    out = prepare_output_dir(out)
+    records = {t: json.loads(record_path(t).read_text()) for t in tasks}
+    result: dict = {"n_boot": n_boot, "noise_seeds": noise_seeds, "tasks": {}}
     groups = {}
     for task, rec in records.items():
         print(f"{task}: recomputing ...", file=sys.stderr)
-        agg, groups[task], data = task_aggregates(task, rec, n_boot=a.n_boot)
-        result["tasks"][task] = {"comparison": compare_intervals(task, rec, n_boot=a.n_boot, noise_seeds=a.noise_seeds),
+        agg, groups[task], data = task_aggregates(task, rec, n_boot=n_boot)
+        result["tasks"][task] = {"comparison": compare_intervals(task, rec, n_boot=n_boot, noise_seeds=noise_seeds),
                                  "aggregates": agg, "groups": groups[task]}
         write_marl_eval(out / f"{task}_marl_eval.json", data)
         plot_profiles(out / f"{task}_performance_profile.png", profile_panels(agg),
                       title=f"{task}: {len(rec['seeds'])} held-out episodes")
     if set(TASKS) <= set(records):
-        result["cross_task"] = cross_task(records, groups, n_boot=a.n_boot)
+        result["cross_task"] = cross_task(records, groups, n_boot=n_boot)
     atomic_write_json(out / "recompute.json", result)
     text = markdown(result)
     atomic_write_text(out / "recompute.md", text)
     print(text)
     return 0
 
-
-if __name__ == "__main__":
-    sys.exit(main())

@@ -5,16 +5,14 @@ group's ``<group>_evaluation.json``): every controller flown once per setting of
 (:func:`train.evaluation.task_eval.task_report`, what ``formation-env evaluate --task-report`` runs after flying)
 from the same episodes, so that the baselines and ceilings are flown once for every group.
 
-    python -m train.publish.records TASK EPISODES_DIR ZIP [ZIP ...] [--out-dir train/policies] [--overwrite]
+    formation-env publish records TASK EPISODES_DIR ZIP [ZIP ...] [--out-dir train/policies] [--overwrite]
 
 Zips are named ``<group>_seed<k>.zip``; flights already saved in EPISODES_DIR are not flown again.
 """
 
 from __future__ import annotations
 
-import argparse
 import json
-import sys
 from pathlib import Path
 
 __all__ = ["fly_setting", "group_levels", "record_spec", "main"]
@@ -120,42 +118,28 @@ def _write_compact(path: Path, data, overwrite: bool) -> None:
     atomic_write_text(path, json.dumps(data, separators=(",", ":")) + "\n", overwrite=overwrite)
 
 
-def main(argv=None) -> int:
-    p = argparse.ArgumentParser(prog="python -m train.publish.records", description=__doc__.split("\n\n")[0])
-    p.add_argument("task")
-    p.add_argument("episodes_dir")
-    p.add_argument("zips", nargs="+")
-    p.add_argument("--episodes", type=int, default=100)
-    p.add_argument("--out-dir", default="train/policies")
-    p.add_argument("--overwrite", action="store_true")
-    a = p.parse_args(argv)
-    if a.episodes < 1:
-        print(f"error: --episodes must be >= 1, got {a.episodes}", file=sys.stderr)
-        return 2
-    missing = [z for z in a.zips if not Path(z).is_file()]
+def write_records(task_name: str, episodes_dir, zips, *, episodes: int = 100, out_dir="train/policies",
+                  overwrite: bool = False) -> list[Path]:
+    """Fly ``zips`` in every setting of ``task_name``'s record spec (episodes kept in ``episodes_dir``) and write each
+    seed group's records into ``out_dir`` (``formation-env publish records``); the paths written."""
+    if isinstance(episodes, bool) or not isinstance(episodes, int) or episodes < 1:
+        raise ValueError(f"episodes must be an integer >= 1, got {episodes!r}")
+    missing = [z for z in zips if not Path(z).is_file()]
     if missing:
-        print(f"error: policy file {missing[0]!r} does not exist", file=sys.stderr)
-        return 2
-    groups = sorted({Path(z).stem.rsplit("_seed", 1)[0] for z in a.zips})
-    try:
-        task, spec = record_spec(a.task)
-        for scenario, sigma in spec.settings:
-            fly_setting(a.task, a.episodes_dir, scenario, sigma, a.zips, episodes=a.episodes)
-        out = Path(a.out_dir)
-        for group in groups:
-            levels, full = group_levels(a.task, a.episodes_dir, group)
-            if full is not None:
-                full["command"] = _command(task, spec, group, True)
-                _write_compact(out / f"{group}_evaluation.json", full, a.overwrite)
-            _write_compact(out / f"{group}_levels.json", {"command": _command(task, spec, group, False),
-                                                          "levels": levels, "about": spec.about.format(group=group)},
-                           a.overwrite)
-            print(f"wrote {group}_levels.json")
-    except (ValueError, OSError) as exc:
-        print(f"error: {exc}", file=sys.stderr)
-        return 2
-    return 0
-
-
-if __name__ == "__main__":
-    raise SystemExit(main())
+        raise ValueError(f"policy file {missing[0]!r} does not exist")
+    groups = sorted({Path(z).stem.rsplit("_seed", 1)[0] for z in zips})
+    task, spec = record_spec(task_name)
+    for scenario, sigma in spec.settings:
+        fly_setting(task_name, episodes_dir, scenario, sigma, zips, episodes=episodes)
+    out, written = Path(out_dir), []
+    for group in groups:
+        levels, full = group_levels(task_name, episodes_dir, group)
+        if full is not None:
+            full["command"] = _command(task, spec, group, True)
+            _write_compact(out / f"{group}_evaluation.json", full, overwrite)
+            written.append(out / f"{group}_evaluation.json")
+        _write_compact(out / f"{group}_levels.json", {"command": _command(task, spec, group, False),
+                                                      "levels": levels, "about": spec.about.format(group=group)},
+                       overwrite)
+        written.append(out / f"{group}_levels.json")
+    return written

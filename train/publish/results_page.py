@@ -319,11 +319,11 @@ def performance_markdown(bench: dict) -> str:
     import contextlib
     import io
 
-    from formation_env.cli.bench import _print_human
+    from formation_env.cli.bench import print_human
 
     buf = io.StringIO()
     with contextlib.redirect_stdout(buf):
-        _print_human(bench)
+        print_human(bench)
     m = bench.get("machine", {})
     return "\n".join([
         "# Performance", "",

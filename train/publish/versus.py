@@ -2,7 +2,7 @@
 e.g. SAC against PPO on close_formation, from one levels record (:mod:`train.publish.levels_record`) whose evaluation
 flew both seed groups.
 
-    python -m train.publish.versus RECORD.json CANDIDATE REFERENCE OUT.json [--overwrite]
+    formation-env publish versus RECORD.json CANDIDATE REFERENCE OUT.json [--overwrite]
 
 ``CANDIDATE`` and ``REFERENCE`` are seed groups of the record (its policies ``<group>_seed<k>``, e.g.
 ``close_formation_sac_setpoints`` and ``close_formation_ppo_setpoints``). Per turbulence level: the headline metric
@@ -15,10 +15,8 @@ run beats a reference run on an episode, with its stratified-bootstrap interval 
 
 from __future__ import annotations
 
-import argparse
 import json
 import re
-import sys
 from pathlib import Path
 
 import numpy as np
@@ -76,31 +74,14 @@ def versus(record: dict, candidate: str, reference: str, *, n_boot: int = N_BOOT
     return out
 
 
-def main(argv: list[str] | None = None) -> int:
+def write_versus(record_path, candidate: str, reference: str, out, *, overwrite: bool = False) -> dict:
+    """:func:`versus` of the two groups of the one-task levels record at ``record_path``, written to ``out``
+    (``formation-env publish versus``); the comparison."""
     from formation_env.io import atomic_write_json
 
-    p = argparse.ArgumentParser(prog="python -m train.publish.versus", description=__doc__.split("\n\n")[0])
-    p.add_argument("record", help="a levels record (python -m train.publish.levels_record) holding both groups")
-    p.add_argument("candidate", help="seed group, e.g. close_formation_sac_setpoints")
-    p.add_argument("reference", help="seed group, e.g. close_formation_ppo_setpoints")
-    p.add_argument("out", help="the comparison's JSON")
-    p.add_argument("--overwrite", action="store_true")
-    args = p.parse_args(argv)
-    try:
-        record = json.loads(Path(args.record).read_text())
-        if "by_level" not in record:
-            raise ValueError(f"{args.record} is not a one-task levels record (no 'by_level')")
-        result = versus(record, args.candidate, args.reference)
-        atomic_write_json(Path(args.out), result, overwrite=args.overwrite)
-    except (OSError, ValueError, FileExistsError) as exc:
-        print(f"versus: {exc}", file=sys.stderr)
-        return 2
-    for level, r in result["levels"].items():
-        print(f"{level}: {result['metric']} {args.candidate} - {args.reference} = {r['difference']:+.4f} "
-              f"[{r['difference_ci'][0]:+.4f}, {r['difference_ci'][1]:+.4f}], P(improvement) "
-              f"{r['probability_of_improvement']['value']:.3f}")
-    return 0
-
-
-if __name__ == "__main__":
-    raise SystemExit(main())
+    record = json.loads(Path(record_path).read_text())
+    if "by_level" not in record:
+        raise ValueError(f"{record_path} is not a one-task levels record (no 'by_level')")
+    result = versus(record, candidate, reference)
+    atomic_write_json(Path(out), result, overwrite=overwrite)
+    return result

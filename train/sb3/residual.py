@@ -39,7 +39,7 @@ def check_residual_on(spec) -> dict:
 
 
 def _agent(spec: dict, layout=None):
-    from ..evaluation.policy_loader import classical_agent
+    from agents.registry import classical_agent
 
     agent = classical_agent(spec["agent"], layout=layout)  # told the observation's layout
     if agent.action_mode != "setpoints":  # pragma: no cover - RESIDUAL_AGENTS lists set-point agents only

@@ -22,13 +22,12 @@ Objective: the formation's induced-drag saving, ``1 - sum_i D_i(formation) / sum
 UAVs' own savings. A grid over uniform steps (every rank the same) starts a bounded L-BFGS-B over all ranks'
 steps.
 
-``python -m formation_env.tasks.n_uav_formations.optimum`` rewrites the cache
+``formation-env data optimum n_uav_formations`` rewrites the cache
 (``formation_env/data/close_formations_optimum.json``) the tasks read.
 """
 
 from __future__ import annotations
 
-import argparse
 import dataclasses
 import json
 from dataclasses import dataclass
@@ -243,15 +242,3 @@ def optimum(name: str, cache: dict | None = None) -> dict:
     if name not in c["formations"]:
         raise ValueError(f"n_uav_formations: no cached optimum for {name!r}; available: {list(c['formations'])}")
     return c["formations"][name]
-
-
-def main(argv=None) -> int:
-    p = argparse.ArgumentParser(description="Rewrite the cached joint optima of the N-UAV close formations.")
-    p.add_argument("--cache", default=str(CACHE_PATH))
-    a = p.parse_args(argv)
-    print(f"wrote {write_cache(a.cache)}")
-    return 0
-
-
-if __name__ == "__main__":
-    raise SystemExit(main())
