@@ -104,7 +104,7 @@ def _fly_policy(policy, scenario: str, *, seed: int, wake: bool, turbulence: flo
 
     from ..replay import EpisodeRecorder
     from ..rollout import Recorder, rollout
-    from ..tasks.terms import task_simulation
+    from ..tasks.compose import task_simulation
 
     class _Replay(Recorder):
         def start(self, sim, out) -> None:

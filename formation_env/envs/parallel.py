@@ -24,7 +24,7 @@ from ..sim.validation import check_action, check_seed
 from ..sim.validation import clipped_values as _clipped_values
 from ..tasks import make_config
 from ..sim.config import EnvConfig
-from ..tasks.terms import task_simulation
+from ..tasks.compose import task_simulation
 from .observations import OBS_CLIP
 
 __all__ = ["FormationParallelEnv", "make_config", "check_action", "reset_options", "IGNORED_RESET_OPTIONS"]

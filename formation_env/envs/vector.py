@@ -30,7 +30,7 @@ from ..sim.validation import MAX_SEED, check_actions, check_count, check_seed
 from ..sim.config import EnvConfig
 from .observations import OBS_CLIP
 from ..tasks import make_config
-from ..tasks.terms import task_simulation
+from ..tasks.compose import task_simulation
 
 __all__ = ["FormationVecEnv", "FormationVectorEnv", "BatchedFormations", "OneObjectVecEnvMethods"]
 

@@ -2,7 +2,7 @@
 (:mod:`formation_env.tasks.terms`): rewards added to the compiled reward, observation groups appended after the
 compiled observation, terminations ending formations as the compiled ones do (the formation then stays frozen
 until reset), each term's ``reset`` hook called after a reset. Built by
-:func:`formation_env.tasks.terms.task_simulation`, never for a task without Python terms, so that the built-in
+:func:`formation_env.tasks.compose.task_simulation`, never for a task without Python terms, so that the built-in
 tasks fly the compiled step alone.
 """
 

@@ -114,7 +114,7 @@ def fly_task(task, policy, seeds: Sequence[int], config, *, keep_series: bool = 
     """Fly ``policy`` on the episodes ``seeds`` of ``config`` (one batch) and measure each with the task's own
     metrics (:attr:`formation_env.tasks.Task.metrics`); ``options``: reset options (e.g. a steady wind)."""
     from ..rollout import rollout
-    from .terms import task_simulation
+    from .compose import task_simulation
 
     seeds = [int(s) for s in seeds]
     if not seeds:

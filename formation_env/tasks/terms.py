@@ -29,8 +29,7 @@ import numpy as np
 from ..rollout import Recorder, RolloutResult
 from ..sim import INFO_REWARD_KEYS
 
-__all__ = ["RewardTerm", "ObservationTerm", "TerminationTerm", "MetricTerm", "TaskTerms", "TermMetrics",
-           "task_simulation", "task_terms"]
+__all__ = ["RewardTerm", "ObservationTerm", "TerminationTerm", "MetricTerm", "TaskTerms", "TermMetrics"]
 
 _REDUCE = {"mean": np.mean, "min": np.min, "max": np.max, "sum": np.sum, "last": lambda x: x[-1]}
 
@@ -179,24 +178,3 @@ class TermMetrics:
                 row[m.name] = float(_REDUCE[m.reduce](arr[m.name][:n, i])) if n else float("nan")
             out.append(row)
         return out
-
-
-def task_terms(scenario) -> TaskTerms | None:
-    """The Python terms of the task flown on ``scenario`` (a name or Scenario), None where it has none."""
-    from .base import task_for_scenario
-
-    task = task_for_scenario(getattr(scenario, "name", scenario))
-    return None if task is None else task.terms
-
-
-def task_simulation(config, batch_size: int = 1, **kwargs):
-    """The Simulation of ``config``: with the Python terms of its scenario's task composed after the compiled step
-    (:class:`~formation_env.sim.composed.ComposedSimulation`), or the plain Simulation for a task without any."""
-    from ..sim import Simulation
-
-    terms = task_terms(config.scenario)
-    if terms is None or not terms.stepped:
-        return Simulation(config, batch_size, **kwargs)
-    from ..sim.composed import ComposedSimulation
-
-    return ComposedSimulation(config, batch_size, terms=terms, **kwargs)

@@ -13,8 +13,8 @@ from formation_env.scenarios import SCENARIOS, get_scenario
 from formation_env.sim import EnvConfig, Simulation
 from formation_env.sim.composed import ComposedSimulation
 from formation_env.tasks import TASKS, Task, get_task, register_task
-from formation_env.tasks.terms import (MetricTerm, ObservationTerm, RewardTerm, TaskTerms, TerminationTerm,
-                                       task_simulation)
+from formation_env.tasks.compose import task_simulation
+from formation_env.tasks.terms import MetricTerm, ObservationTerm, RewardTerm, TaskTerms, TerminationTerm
 
 NAME = "terms_probe"
 

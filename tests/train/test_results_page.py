@@ -37,18 +37,16 @@ def test_a_changed_record_changes_the_page(tmp_path, monkeypatch):
     col = rp._metric_key(rp._columns(node[name]), "harvest_ratio")
     node[name][col] = [v * 0.5 for v in node[name][col]]
     (tmp_path / src.file).write_text(json.dumps(data))
-    monkeypatch.setattr(rp, "POLICIES", tmp_path)
-    changed = rp.collect((src,))
-    monkeypatch.setattr(rp, "POLICIES", rp.REPO / "train" / "policies")
+    changed = rp.collect((src,), policies=tmp_path)
     original = rp.collect((src,))
     page_changed, _ = rp.results_markdown(changed)
     page_original, _ = rp.results_markdown(original)
     assert page_changed != page_original
 
 
-def test_the_absolute_metric_flies_each_methods_best_seed(tmp_path, monkeypatch):
+def test_the_absolute_metric_flies_each_methods_best_seed():
     """The seed each absolute record flew is the one the committed 100-episode record chooses (its headline
-    estimator), on seeds disjoint from those episodes; a record naming another seed fails the page."""
+    estimator), on seeds disjoint from those episodes: a record left behind by a changed record fails here."""
     from formation_env.tasks import get_task
     from train.publish import absolute as ab
 
@@ -74,11 +72,3 @@ def test_the_absolute_metric_flies_each_methods_best_seed(tmp_path, monkeypatch)
                 values.append(ab._point(x, c["estimator"]))
             best = max(values) if task.evaluation.higher_is_better else min(values)
             assert c["value"] == pytest.approx(best, abs=1e-6)
-        wrong = {g: dict(r, policy=r["policy"][:-1] + ("1" if r["policy"][-1] != "1" else "2"))
-                 for g, r in rec.items()}
-        tmp = tmp_path / f"{name}_absolute.json"
-        tmp.write_text(json.dumps({"records": wrong}))
-        monkeypatch.setattr(ab, "absolute_path", lambda _name, _tmp=tmp: _tmp)
-        with pytest.raises(ValueError, match="chooses"):
-            ab.absolute_markdown(task, data)
-        monkeypatch.undo()

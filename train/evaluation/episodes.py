@@ -170,7 +170,7 @@ def run_episodes(policy, config, seeds: Sequence[int], *, keep_series: bool = Fa
     protocol) and return the per-episode metrics (the module's table); ``recorders``: more
     :class:`formation_env.rollout.Recorder` s to see the same rollout."""
     from formation_env.rollout import rollout
-    from formation_env.tasks.terms import task_simulation, task_terms
+    from formation_env.tasks.compose import task_simulation, task_terms
 
     seeds = [int(s) for s in seeds]
     if not seeds:

@@ -34,9 +34,9 @@ KEEP = ("seed", "duration_s", "harvest_ratio", "saving_ratio", "saving", "format
 
 
 def _pages():
-    from . import results_page
+    from . import record_data
 
-    return results_page
+    return record_data
 
 
 def _estimator(metric: str) -> str:
@@ -169,7 +169,8 @@ def absolute_episodes(task_name: str) -> dict[tuple[str, str], np.ndarray]:
 
 
 def absolute_markdown(task, data: dict) -> list[str]:
-    """The page's "absolute metric" subsection of ``task`` (empty without a record)."""
+    """The page's "absolute metric" subsection of ``task`` (empty without a record). That each record flew the seed
+    :func:`best_seeds` chooses from the committed records is a test's to hold (tests/train/test_results_page.py)."""
     from train.evaluation.aggregates import aggregate
 
     rp = _pages()
@@ -177,7 +178,6 @@ def absolute_markdown(task, data: dict) -> list[str]:
     if not path.is_file():
         return []
     rec = json.loads(path.read_text())["records"]
-    chosen = best_seeds(task.name, data)
     ev = task.evaluation
     stat = _estimator(ev.metric)
     name = "mean" if stat == "mean" else "IQM"
@@ -188,10 +188,6 @@ def absolute_markdown(task, data: dict) -> list[str]:
              f"| method | seed chosen ({name} on its 100 episodes) | episodes | {name} [95 % CI] | mean | "
              "lateral RMS, b | vertical RMS, b | collisions |", "|---|---|---|---|---|---|---|---|"]
     for group, r in sorted(rec.items()):
-        if chosen.get(group, {}).get("policy") != r["policy"]:
-            raise ValueError(f"{path.name}: {group} flew {r['policy']}, but the committed record now chooses "
-                             f"{chosen.get(group, {}).get('policy')}; run `formation-env results --absolute "
-                             f"{task.name} --overwrite`")
         cols = {k: np.asarray(v, dtype=float) for k, v in r["episodes"].items()}
         key = rp._metric_key(cols, ev.metric)
         agg = aggregate(cols[key][None, :], statistics=("iqm", "mean"), n_boot=rp.N_BOOT, seed=0)
