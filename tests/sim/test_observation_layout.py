@@ -67,7 +67,18 @@ def test_the_sidecar_form_round_trips_and_refuses_another_declaration():
     with pytest.raises(ValueError, match="differs from this version's"):
         ObservationLayout.from_dict(data)
     with pytest.raises(ValueError, match="does not declare"):
+        ObservationLayout.from_dict({"neighbours": 2, "groups": [["sonar", 3], ["air_data", 3]]})
+    with pytest.raises(ValueError, match="differs from this version's"):  # a task's group, the compiled ones missing
         ObservationLayout.from_dict({"neighbours": 2, "groups": [["sonar", 3]]})
+    # a task's Python groups come after the compiled ones and round-trip as its extra groups
+    task_layout = ObservationLayout.of(3, 2).with_extra([("fuel_saving", 1)])
+    back = ObservationLayout.from_dict(task_layout.to_dict())
+    assert back == task_layout and back.extra == (("fuel_saving", 1),)
+    assert back.size == ObservationLayout.of(3, 2).size + 1 == back.compiled_size + 1
+    assert back.slice("fuel_saving") == slice(back.size - 1, back.size)
+    assert ObservationLayout(None, (), (("fuel_saving", 1),)).fit(back.size) == back
+    with pytest.raises(ValueError, match="new names"):
+        ObservationLayout.of(3, 2).with_extra([("air_data", 3)])
     with pytest.raises(ValueError, match="not an optional observation group"):
         ObservationLayout(2, ("air_data",))
     with pytest.raises(TypeError, match="unknown observation switch"):
