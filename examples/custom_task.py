@@ -29,6 +29,7 @@ import numpy as np
 import torch
 from stable_baselines3 import PPO
 
+import formation_env.own_packages  # noqa: F401  `train` below is the project's, even beside a user's train.py
 from formation_env.envs import FormationVecEnv, register_envs
 from formation_env.scenarios import get_scenario
 from formation_env.sim.config import RewardWeights
