@@ -1,7 +1,7 @@
 """Package layering (issue 14): ``formation_env`` imports neither ``agents`` nor ``train`` (only the
 console commands of ``formation_env.cli`` import ``train``, lazily); ``agents`` does not import
-``train``; no import cycle between the top-level packages nor between formation_env's subpackages;
-files stay small.
+``train``; no import cycle between the top-level packages, between formation_env's subpackages, nor between
+formation_env's modules; files stay small.
 
 The static checks read the sources with :mod:`ast` and count every import: module level, inside
 functions, ``importlib.import_module("...")`` / ``__import__("...")`` with a literal name."""
@@ -313,6 +313,60 @@ def test_no_cycle_between_formation_env_subpackages():
     cycles = _cycles(edges)
     assert not cycles, ("import cycles between formation_env subpackages (edge: importing file:line); "
                         "to be decided (see issue 14):\n" + _describe(cycles, edges))
+
+
+def _targets(found, modules) -> dict[str, int]:
+    """The modules of ``modules`` that the imports ``found`` (:func:`_scan`'s) name, each with its first line:
+    ``from p import x`` names ``p.x`` where that is a module, else ``p`` (``x`` an attribute of ``p``'s
+    ``__init__``); the parent packages Python initialises on the way are not edges."""
+    by_line: dict[int, list[str]] = {}
+    for name, line, _ in found:
+        by_line.setdefault(line, []).append(name)
+    out: dict[str, int] = {}
+    for line, names in sorted(by_line.items()):
+        for n in names:
+            children = [c for c in names if c.rpartition(".")[0] == n]
+            if children and all(c in modules for c in children):
+                continue  # ``from p import a, b`` of submodules: p is only the path to them
+            if n in modules:
+                out.setdefault(n, line)
+    return out
+
+
+def _module_edges(package: str) -> dict[str, dict[str, list[str]]]:
+    """Edges module -> module inside ``package`` from every import (module level, in a function, under
+    ``TYPE_CHECKING``): a deferred import still makes the two modules one unit to read, test and change."""
+    files = {_module_name(p): p for p in _py_files(package)}
+    edges: dict[str, dict[str, list[str]]] = {}
+    for mod, path in files.items():
+        for dst, line in _targets(_imports(path), files).items():
+            if dst != mod:
+                edges.setdefault(mod, {}).setdefault(dst, []).append(_where(path, line))
+    return edges
+
+
+def test_module_cycle_finder_sees_deferred_type_checking_and_package_imports():
+    modules = {"p", "p.a", "p.b", "p.c", "p.d"}
+    sources = {
+        "p": "from .c import Y\nfrom .d import Z\n",
+        "p.a": "from . import b\n",  # the submodule b, not the package
+        "p.b": "def f():\n    from .a import X\n",  # deferred: still a cycle a <-> b
+        "p.c": "from typing import TYPE_CHECKING\nif TYPE_CHECKING:\n    from . import a\n",
+        "p.d": "def g():\n    from . import CONST\n",  # an attribute of p's __init__: p <-> d
+    }
+    edges = {m: {t: ["x"] for t in _targets(_scan(src, m, m == "p"), modules) if t != m}
+             for m, src in sources.items()}
+    assert edges["p.c"] == {"p.a": ["x"]} and edges["p.a"] == {"p.b": ["x"]}
+    assert _cycles(edges) == [["p", "p.d"], ["p.a", "p.b"]]
+
+
+def test_no_cycle_between_formation_env_modules():
+    """No two modules of formation_env import each other, directly or around a loop, at any level (a function's
+    import and a ``TYPE_CHECKING`` import count)."""
+    edges = _module_edges("formation_env")
+    cycles = _cycles(edges)
+    assert not cycles, "import cycles between formation_env modules (edge: importing file:line):\n" + \
+        _describe(cycles, edges)
 
 
 # ---------------------------------------------------------------- (d) file size
