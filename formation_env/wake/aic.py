@@ -120,9 +120,9 @@ def assemble_and_solve(lat, posed, aic, gamma, vcross, sheet=None, keep=None):
 def assemble_and_solve_scalar(lat, posed, aic, gamma, vcross, sheet=None, keep=None):
     """Build the AIC over every panel of every vehicle and solve for the circulations (4.25-4.69).
 
-    ``lat`` the body-axis lattice and the solve's settings (a :class:`~formation_env.wake.arrays.LatticeArrays`:
+    ``lat`` the body-axis lattice and the solve's settings (a :class:`~formation_env.wake.structs.LatticeArrays`:
     its ``cutoff_m``, ``aic_core_mode``, ``kinematic_viscosity`` and ``overlap_core_m`` below), ``posed`` the
-    formation posed in NED (a :class:`~formation_env.wake.posing.PosedLattice`, whose scratch it uses); ``aic``
+    formation posed in NED (a :class:`~formation_env.wake.structs.PosedLattice`, whose scratch it uses); ``aic``
     (N, N) and ``gamma`` (N,) receive the matrix and the circulation.
 
     Boundary condition (V_induced + V_inf) . n = 0 with V_inf = -V_vehicle: A G = V_vehicle . n.

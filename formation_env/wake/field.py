@@ -21,8 +21,8 @@ def field_velocity(px, py, pz, vehicle_filter, keep_only, lat, posed, gamma, cor
                    recv_w=0.0, frames=None):
     """Velocity induced at one field point by the horseshoes of every vehicle except
     ``vehicle_filter`` (-1 excludes none) or, with ``keep_only``, of that vehicle alone, for the circulation
-    ``gamma`` (N,) of the lattice ``lat`` (a :class:`~formation_env.wake.arrays.LatticeArrays`: its ``cutoff_m``
-    and ``kinematic_viscosity``) posed as ``posed`` (a :class:`~formation_env.wake.posing.PosedLattice`, whose
+    ``gamma`` (N,) of the lattice ``lat`` (a :class:`~formation_env.wake.structs.LatticeArrays`: its ``cutoff_m``
+    and ``kinematic_viscosity``) posed as ``posed`` (a :class:`~formation_env.wake.structs.PosedLattice`, whose
     scratch it uses) (Eqs. 4.70-4.75): bound and chordwise branches plain Biot-Savart (clipped at ``cutoff`` so
     that overlapping vehicles stay finite), trailing legs with the viscous core of age
     tau = |P - source surface origin| / V_source (``core_mode`` 0 plain, 1 Lamb-Oseen,
@@ -94,7 +94,7 @@ def field_velocity(px, py, pz, vehicle_filter, keep_only, lat, posed, gamma, cor
 def field_velocity_batch(points, vehicle_filter, keep_only, lattice, pos, euler, airspeed, alpha, beta, gamma,
                          core_mode, overlap_core, out, sheet=None, recv_w=None):
     """Induced velocity (NED) at arbitrary points (B, P, 3) for solved circulations (B, N) of the lattice ``lattice``
-    (a :class:`~formation_env.wake.arrays.LatticeArrays`, or the plain tuple of its fields) at the poses (B, V, ...);
+    (a :class:`~formation_env.wake.structs.LatticeArrays`, or the plain tuple of its fields) at the poses (B, V, ...);
     ``vehicle_filter`` (P,), ``keep_only``, ``core_mode``, ``overlap_core`` and ``sheet`` as in
     :func:`field_velocity` (they override the lattice's), ``recv_w`` (P,) its receiving width per point (None: 0)."""
     lat = LatticeArrays(*lattice)

@@ -48,7 +48,7 @@ def evaluate_one(lat, pos, euler, airspeed, alpha, beta, gamma_out, vpts_out, wi
                  omega_ned_out, sheet=None, keep=None):
     """One formation: pose, joint solve, induced velocity at the evaluation points (other
     vehicles only) and the effective translational and rotational wind per vehicle.
-    ``lat``: the body-axis lattice and the solve's settings (a :class:`~formation_env.wake.arrays.LatticeArrays`;
+    ``lat``: the body-axis lattice and the solve's settings (a :class:`~formation_env.wake.structs.LatticeArrays`;
     its ``overlap_core_m``, m, 0 = off: the minimum core of the other vehicles' branches in the solve and the field,
     see :func:`formation_env.wake.field.field_velocity`). Poses and air data (V, ...) as
     :func:`~formation_env.wake.posing.posed_lattice`'s; the outputs: circulation (N,), induced velocity at the
@@ -184,7 +184,7 @@ def _make_batch(parallel: bool):
     def evaluate_batch(lattice, pos, euler, airspeed, alpha, beta, gamma_out, vpts_out, wind_ned_out, wind_b_out,
                        omega_b_out, omega_ned_out, sheet=None):
         """:func:`evaluate_one` of B formations (poses, air data and outputs with the batch axis first) of the
-        lattice ``lattice``: a :class:`~formation_env.wake.arrays.LatticeArrays` or the plain tuple of its fields
+        lattice ``lattice``: a :class:`~formation_env.wake.structs.LatticeArrays` or the plain tuple of its fields
         (what :meth:`formation_env.wake.WakeModel.evaluate` passes: numba types a plain tuple argument in C, a
         named tuple through Python)."""
         lat = LatticeArrays(*lattice)

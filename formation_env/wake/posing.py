@@ -104,7 +104,7 @@ def branch_directions(x1, x3, knot_surface, surface_knot_start, bound_dir, chord
 
 @_jit
 def posed_lattice(lat, pos, euler, airspeed, alpha, beta):
-    """One formation's lattice ``lat`` (a :class:`~formation_env.wake.arrays.LatticeArrays`) posed in NED at the
+    """One formation's lattice ``lat`` (a :class:`~formation_env.wake.structs.LatticeArrays`) posed in NED at the
     vehicles' poses and air data (see :func:`place_lattice`), with its branch directions and scratch arrays for
     the point-to-knot vectors: a :class:`PosedLattice`."""
     nv = pos.shape[0]
