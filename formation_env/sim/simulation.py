@@ -447,6 +447,8 @@ class Simulation:
         return w[:, None, :] + self.state.gust_ned
 
     def reward_terms(self, index: int) -> dict[str, np.ndarray]:
-        """Formation ``index``'s last reward terms, name -> (V,)."""
-        t = self.output.reward_terms[index]
-        return {**{k: t[:, j] for j, k in enumerate(REWARD_TERMS)}, "total": self.output.reward[index]}
+        """Formation ``index``'s last reward terms, name -> (V,) (``info.formation(index)``'s ``reward_terms`` by name
+        and its ``reward`` as ``"total"``)."""
+        f = self.info.formation(index)
+        t = f.reward_terms
+        return {**{k: t[:, j] for j, k in enumerate(REWARD_TERMS)}, "total": f.reward}
