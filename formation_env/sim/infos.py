@@ -50,9 +50,11 @@ class InfoArrays:
         return InfoArrays(self._sim, int(i))
 
     @property
-    def time_s(self) -> np.ndarray:
-        """(B,) episode time, s."""
-        return self._at(self._sim.state.step) * self._sim.dt
+    def time_s(self) -> np.ndarray | float:
+        """(B,) episode time, s (a formation's: a float)."""
+        if self._i is None:
+            return self._sim.state.step * self._sim.dt
+        return float(int(self._sim.state.step[self._i]) * self._sim.dt)  # steps < 2**53 convert exactly
 
     @property
     def slot_error_m(self) -> np.ndarray:
@@ -215,7 +217,7 @@ class InfoArrays:
         if self._i is None:
             raise ValueError("per_vehicle: a view of one formation (InfoArrays.formation(i)) has per-UAV infos")
         separation, clean = self._separation(self._i)
-        t = float(self.time_s)  # the same float as float(step * dt) (steps < 2**53 convert exactly)
+        t = self.time_s
         # scalars through tolist(): the same Python floats, ints and bools as float()/int()/bool() per element
         slot, sep, fuel = self.slot_error_m.tolist(), separation.tolist(), self.fuel_kg.tolist()
         status, crashed, box = self.status.tolist(), self.crashed.tolist(), self.box_depth_m.tolist()
