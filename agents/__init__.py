@@ -4,9 +4,10 @@
   ``setpoints`` action mode).
 * :mod:`agents.station_keeper`: a classical station keeper tuned for cross-track precision in
   ``close_formation`` (attitude laws through the set-points, vertical-gust feed-forward, separation guard).
-* :mod:`agents.fcs`, :mod:`agents.observation`, :mod:`agents.run`: compatibility re-exports of
-  :mod:`formation_env.control` (the thesis PID flight control system, Appendix A),
-  :mod:`formation_env.control.observation` (the FCS observation adapter) and
-  :mod:`formation_env.runs.runner` (the scenario runner), which moved into the package so
-  that ``formation_env`` never imports ``agents``.
+* :mod:`agents.registry`: the classical agents by name (:func:`~agents.registry.classical_agent`), for the
+  evaluation's ``--policy NAME`` and a residual learner's ``residual_on`` agent.
+
+The thesis PID flight control system (Appendix A) they build on is :mod:`formation_env.control` (its observation
+adapter :mod:`formation_env.control.observation`), and the scenario runner :mod:`formation_env.runs.runner`: the
+environments run them, and ``formation_env`` never imports ``agents``.
 """

@@ -8,9 +8,9 @@ from dataclasses import fields
 
 import numpy as np
 
-from formation_env.envs.observations import observation_size, to_dict
+from formation_env.sim.layout import ObservationLayout
 
-__all__ = ["check_gains", "RowIntegrators", "observation_groups"]
+__all__ = ["check_gains", "RowIntegrators", "observation_groups", "agent_layout"]
 
 
 def check_gains(gains) -> None:
@@ -22,29 +22,26 @@ def check_gains(gains) -> None:
             raise ValueError(f"{type(gains).__name__}.{f.name} must be a finite number >= 0, got {v!r}")
 
 
-def observation_groups(obs, owner: str, neighbour_wind: bool = False,
-                       neighbour_attitude: bool = False) -> tuple[np.ndarray, dict]:
-    """``(obs as float (N, D), its groups)`` for any formation size (the observation length fixes V); a
-    ValueError naming ``owner`` for another shape or a length no formation has. ``neighbour_wind``: the observation
-    ends with the neighbours' winds (EnvConfig.neighbour_wind), 9 values per observed neighbour instead of 6; the
-    length alone cannot say so (47 + 6 x 3 = 47 + 9 x 2), so the agent must be told; ``neighbour_attitude``
-    (EnvConfig.neighbour_attitude) 3 more per neighbour."""
+def observation_groups(obs, owner: str, layout: ObservationLayout | None = None) -> tuple[np.ndarray, dict]:
+    """``(obs as float (N, D), its groups)`` for any formation size (the observation length fixes the number of
+    neighbours); a ValueError naming ``owner`` for another shape or a length no formation has. ``layout``: the
+    optional groups the observations hold (the env's ``observation_layout``, or a policy's; None: none), which the
+    length alone cannot say (47 + 6 x 3 = 47 + 9 x 2), so the agent must be told."""
     obs = np.asarray(obs, dtype=float)
     if obs.ndim != 2:
         raise ValueError(f"{owner}.act: obs must have shape (N, D), got {obs.shape}")
-    if neighbour_wind or neighbour_attitude:
-        base = observation_size(1)  # no neighbour
-        per = 6 + 3 * bool(neighbour_wind) + 3 * bool(neighbour_attitude)
-        k, rem = divmod(obs.shape[1] - base, per)
-        if rem or k < 1:
-            what = " and ".join(n for n, on in (("winds", neighbour_wind), ("attitudes", neighbour_attitude)) if on)
-            raise ValueError(f"{owner}.act: observation length {obs.shape[1]} is not that of an observation with "
-                             f"neighbours' {what} ({base} + {per} k, k >= 1)")
-        return obs, to_dict(obs, k + 1, k, bool(neighbour_wind), bool(neighbour_attitude))
-    n_vehicles = next((v for v in range(1, 65) if observation_size(v) == obs.shape[1]), None)
-    if n_vehicles is None:
-        raise ValueError(f"{owner}.act: observation length {obs.shape[1]} matches no formation size")
-    return obs, to_dict(obs, n_vehicles)
+    fitted = (layout or ObservationLayout()).fit(obs.shape[1], f"{owner}.act")
+    return obs, fitted.split(obs)
+
+
+def agent_layout(layout, owner: str) -> ObservationLayout:
+    """``layout`` (None: no optional group) checked: an :class:`ObservationLayout`, else a ValueError naming
+    ``owner``."""
+    if layout is None:
+        return ObservationLayout()
+    if not isinstance(layout, ObservationLayout):
+        raise ValueError(f"{owner}: layout must be an ObservationLayout or None, got {type(layout).__name__}")
+    return layout
 
 
 class RowIntegrators:

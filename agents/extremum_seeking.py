@@ -23,7 +23,7 @@ optimum it reaches 0.22 of it on the tuning episodes against the keeper's 0.41).
 :class:`agents.pid_formation.PIDFormation`'s speed channel (wind feed-forward, PD and integral on the along-track
 error): the along-track set-point is fixed in wake surfing, and the thesis tracker's proportional along-track loop
 alone lags 8 m per 1 m/s of wind. The gains were tuned on training seeds
-(``train/evaluation/wake_surfing_eval.py --tune-es``; docs/wake_surfing.md has the sweep and its numbers).
+(``formation-env evaluate --scenario wake_surfing --task-report --tune``; docs/wake_surfing.md has the sweep and its numbers).
 """
 
 from __future__ import annotations
@@ -45,7 +45,7 @@ INNER_LOOPS = ("pid", "station_keeper")
 @dataclass(frozen=True)
 class ExtremumSeekingGains:
     """ES parameters (SI: m, s, rad/s). The defaults are the sweep's best on 16 training-range episodes
-    (``python -m train.evaluation.wake_surfing_eval --tune-es``; docs/wake_surfing.md)."""
+    (``formation-env evaluate --scenario wake_surfing --task-report --tune``; docs/wake_surfing.md)."""
 
     # Issue 23 part 7 (the converged wake, whose optimum on the leader's wake plane is sharp: 0.22 of saving lost
     # 0.1 b above or below it): the sweep's best with the station keeper flying the set-point (84 combinations in five
@@ -226,5 +226,7 @@ class ExtremumSeeking:
         """(N, 3) position minus the nominal slot demand, m, slot frame (from the observation)."""
         from agents.pid_formation import inverse_slog
         from formation_env.envs.observations import POSITION_SCALE_M
+        from formation_env.sim.layout import ObservationLayout
 
-        return inverse_slog(obs[:, 10:13], POSITION_SCALE_M)
+        # the group lies before the neighbours' groups: at the same place in every layout
+        return inverse_slog(obs[:, ObservationLayout(0).slice("slot_position_error")], POSITION_SCALE_M)

@@ -36,10 +36,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from formation_env.envs.actions import SETPOINT_POSITION_SCALE_M, SETPOINT_SPEED_SCALE_MPS
+from formation_env.sim.params import SETPOINT_POSITION_SCALE_M, SETPOINT_SPEED_SCALE_MPS
 from formation_env.envs.observations import POSITION_SCALE_M, VELOCITY_SCALE_MPS, WIND_SCALE_MPS
+from formation_env.sim.layout import ObservationLayout
 
-from .common import RowIntegrators, check_gains, observation_groups
+from .common import RowIntegrators, agent_layout, check_gains, observation_groups
 
 __all__ = ["PIDFormationGains", "PIDFormation", "inverse_slog"]
 
@@ -77,7 +78,7 @@ class PIDFormation(RowIntegrators):
 
     def __init__(self, gains: PIDFormationGains | None = None, control_hz: float = 10.0, *,
                  setpoint_low_m=None, setpoint_high_m=None, speed_range_mps: float | None = None,
-                 neighbour_wind: bool = False, neighbour_attitude: bool = False) -> None:
+                 layout: ObservationLayout | None = None) -> None:
         """``setpoint_low_m`` / ``setpoint_high_m`` (3,) and ``speed_range_mps``: the env's set-point ranges
         (:func:`formation_env.sim.params.setpoint_ranges`; default +-5 m and 2 m/s), so that the offsets
         this controller computes map to the actions that command them (an axis with no range is held)."""
@@ -86,8 +87,7 @@ class PIDFormation(RowIntegrators):
         self.setpoint_high_m = (np.full(3, SETPOINT_POSITION_SCALE_M) if setpoint_high_m is None
                                 else np.asarray(setpoint_high_m, dtype=float).reshape(3))
         self.speed_range_mps = SETPOINT_SPEED_SCALE_MPS if speed_range_mps is None else float(speed_range_mps)
-        self.neighbour_wind = bool(neighbour_wind)  # the observations carry the neighbours' winds (EnvConfig option)
-        self.neighbour_attitude = bool(neighbour_attitude)  # and their attitudes (EnvConfig option)
+        self.layout = agent_layout(layout, "PIDFormation")  # the optional groups its observations hold
         if (not np.all(np.isfinite(self.setpoint_low_m)) or not np.all(np.isfinite(self.setpoint_high_m))
                 or np.any(self.setpoint_low_m > 0) or np.any(self.setpoint_high_m < 0)):
             raise ValueError(f"PIDFormation: set-point ranges must be finite with low <= 0 <= high, got "
@@ -124,7 +124,7 @@ class PIDFormation(RowIntegrators):
         return np.clip(act, -1.0, 1.0)
 
     def act(self, obs) -> np.ndarray:
-        obs, groups = observation_groups(obs, "PIDFormation", self.neighbour_wind, self.neighbour_attitude)
+        obs, groups = observation_groups(obs, "PIDFormation", self.layout)
         self._rows_for(obs)
         g = self.gains
         dt = 1.0 / self.control_hz

@@ -28,10 +28,11 @@ from dataclasses import dataclass
 import numpy as np
 
 from formation_env.control.gains import TrackerGains
-from formation_env.envs.actions import SETPOINT_POSITION_SCALE_M, SETPOINT_SPEED_SCALE_MPS
+from formation_env.sim.params import SETPOINT_POSITION_SCALE_M, SETPOINT_SPEED_SCALE_MPS
 from formation_env.envs.observations import NEIGHBOUR_POSITION_SCALE_M, POSITION_SCALE_M
+from formation_env.sim.layout import ObservationLayout
 
-from .common import check_gains, observation_groups
+from .common import agent_layout, check_gains, observation_groups
 from .pid_formation import inverse_slog
 
 __all__ = ["GuardGains", "SeparationGuard", "guard_terms", "speed_excess_offset_m"]
@@ -104,16 +105,15 @@ class SeparationGuard:
     """``filter(obs (N, D), actions (N, 4)) -> (N, 4)``: ``setpoints`` actions (the +-5 m position and +-2 m/s speed
     ranges of a scenario without a safe box) with the guard's shift added (and, with ``clip_ramp`` > 0, the lateral
     set-point clipped to the far side of the shift deep in the guard); stateless, so one instance serves every row
-    and episode. Rows outside the guard zone pass through unchanged (bit for bit). ``neighbour_wind``: the
-    observations carry the neighbours' winds (EnvConfig.neighbour_wind), which their length alone does not say;
-    ``neighbour_attitude``: their attitudes (EnvConfig.neighbour_attitude)."""
+    and episode. Rows outside the guard zone pass through unchanged (bit for bit). ``layout``: the
+    optional groups the observations hold (an :class:`~formation_env.sim.layout.ObservationLayout`: the env's or the
+    policy's), which their length alone does not say."""
 
     action_mode = "setpoints"
 
     def __init__(self, gains: GuardGains | None = None, *, tracker: TrackerGains | None = None,
-                 neighbour_wind: bool = False, neighbour_attitude: bool = False) -> None:
-        self.neighbour_wind = bool(neighbour_wind)
-        self.neighbour_attitude = bool(neighbour_attitude)
+                 layout: ObservationLayout | None = None) -> None:
+        self.layout = agent_layout(layout, "SeparationGuard")
         self.gains = GuardGains() if gains is None else gains
         if not isinstance(self.gains, GuardGains):
             raise ValueError(f"SeparationGuard: gains must be a GuardGains, got {type(gains).__name__}")
@@ -122,7 +122,7 @@ class SeparationGuard:
             raise ValueError(f"SeparationGuard: the tracker's Kp_alongtrack must be > 0, got {self.kp_alongtrack!r}")
 
     def filter(self, obs, actions) -> np.ndarray:
-        obs, groups = observation_groups(obs, "SeparationGuard", self.neighbour_wind, self.neighbour_attitude)
+        obs, groups = observation_groups(obs, "SeparationGuard", self.layout)
         act = np.asarray(actions)
         if act.shape != (obs.shape[0], 4):
             raise ValueError(f"SeparationGuard.filter: actions must have shape ({obs.shape[0]}, 4), got {act.shape}")

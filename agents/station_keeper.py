@@ -77,11 +77,12 @@ from dataclasses import dataclass
 import numpy as np
 
 from formation_env.control.gains import AutopilotGains, TrackerGains
-from formation_env.envs.actions import SETPOINT_POSITION_SCALE_M, SETPOINT_SPEED_SCALE_MPS
+from formation_env.sim.params import SETPOINT_POSITION_SCALE_M, SETPOINT_SPEED_SCALE_MPS
 from formation_env.envs.observations import (POSITION_SCALE_M, VELOCITY_SCALE_MPS,
                                              WIND_SCALE_MPS, slog)
+from formation_env.sim.layout import ObservationLayout
 
-from .common import RowIntegrators, check_gains, observation_groups
+from .common import RowIntegrators, agent_layout, check_gains, observation_groups
 from .pid_formation import inverse_slog
 from .separation_guard import GuardGains, guard_terms, neighbour_positions, speed_excess_offset_m
 
@@ -152,10 +153,9 @@ class StationKeeper(RowIntegrators):
 
     def __init__(self, gains: StationKeeperGains | None = None, control_hz: float = 10.0, *,
                  airspeed_mps: float = 25.0, tracker: TrackerGains | None = None,
-                 autopilot: AutopilotGains | None = None, neighbour_wind: bool = False,
-                 neighbour_attitude: bool = False) -> None:
-        self.neighbour_wind = bool(neighbour_wind)  # the observations carry the neighbours' winds (EnvConfig option)
-        self.neighbour_attitude = bool(neighbour_attitude)  # and their attitudes (EnvConfig option)
+                 autopilot: AutopilotGains | None = None,
+                 layout: ObservationLayout | None = None) -> None:
+        self.layout = agent_layout(layout, "StationKeeper")  # the optional groups its observations hold
         self.gains = StationKeeperGains() if gains is None else gains
         if not isinstance(self.gains, StationKeeperGains):
             raise ValueError(f"StationKeeper: gains must be a StationKeeperGains, got {type(gains).__name__}")
@@ -182,7 +182,8 @@ class StationKeeper(RowIntegrators):
         with the slot error taken to the displaced slot, and its own offsets are shifted back by the displacement. How
         a wake-surfing controller that chooses where to fly (the extremum seeker, the oracle ceiling) lets the keeper
         hold it; the caller maps the offsets onto its own set-point range (a safe box's)."""
-        shifted, groups = observation_groups(np.array(obs, dtype=float), "StationKeeper")  # groups: views into a copy
+        # groups: views into a copy
+        shifted, groups = observation_groups(np.array(obs, dtype=float), "StationKeeper", self.layout)
         off = np.asarray(offset_m, dtype=float)
         if off.shape != (shifted.shape[0], 2):
             raise ValueError(f"StationKeeper.hold_offset_m: offset_m must have shape ({shifted.shape[0]}, 2), got "
@@ -193,7 +194,7 @@ class StationKeeper(RowIntegrators):
         return self.act(shifted)[:, 1:3] * SETPOINT_POSITION_SCALE_M + off
 
     def act(self, obs) -> np.ndarray:
-        obs, groups = observation_groups(obs, "StationKeeper", self.neighbour_wind, self.neighbour_attitude)
+        obs, groups = observation_groups(obs, "StationKeeper", self.layout)
         self._rows_for(obs)
         g, dt = self.gains, 1.0 / self.control_hz
         err = inverse_slog(groups["slot_position_error"], POSITION_SCALE_M)

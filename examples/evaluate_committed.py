@@ -18,6 +18,7 @@ import argparse
 from pathlib import Path
 
 from formation_env.tasks import get_task
+import formation_env.own_packages  # noqa: F401  `train` below is the project's, even beside a user's train.py
 from train.evaluation.evaluate import evaluate
 
 REPO = Path(__file__).resolve().parents[1]

@@ -16,6 +16,7 @@ rllib --scenario vee5`` is the command-line equivalent; ``--address`` runs it on
 import argparse
 
 from formation_env.tasks import get_task
+import formation_env.own_packages  # noqa: F401  `train` below is the project's, even beside a user's train.py
 from train.evaluation.evaluate import evaluate
 from train.rllib.backend import train_rllib
 

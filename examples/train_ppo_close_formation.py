@@ -26,6 +26,7 @@ from stable_baselines3 import PPO
 
 from formation_env.envs import FormationVecEnv
 from formation_env.tasks import get_task
+import formation_env.own_packages  # noqa: F401  `train` below is the project's, even beside a user's train.py
 from train.evaluation.evaluate import evaluate
 from train.sb3.guard import GuardedVecEnv
 from train.sb3.reward_scale import ScaleReward

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-__all__ = ["MissingDependencyError", "ClusterUnreachableError"]
+__all__ = ["MissingDependencyError", "ClusterUnreachableError", "ShadowedPackageError"]
 
 
 class MissingDependencyError(ImportError):
@@ -11,3 +11,8 @@ class MissingDependencyError(ImportError):
 
 class ClusterUnreachableError(ConnectionError):
     """The Ray cluster named by ``--address`` cannot be reached or joined; the message says why."""
+
+
+class ShadowedPackageError(ImportError):
+    """The name ``agents`` or ``train`` is already bound in this process to a module that is not formation-env's
+    own package of that name (a user's ``train.py`` imported first); the message names both places."""

@@ -4,7 +4,8 @@ wake-surfing evaluation, replay, the scenario runner) runs :func:`rollout` with 
 Policy protocol (SB3 loaders, RLlib loaders, the thesis PID, ``pid_formation``, extremum seeking):
 
 * ``reset(n_rows)``: called once before the first decision with the number of observation rows
-  (formations x agents);
+  (formations x agents); a stateful policy starts its state here (a PID's integrators, a recurrent policy's
+  memory), which ``act`` then carries from one decision to the next, row by row;
 * ``act(obs) -> actions``: ``obs`` (N, D) float32, the agents' rows in formation-major order (row
   ``f * A + k`` is agent ``k`` of formation ``f``); actions (N, 4) in [-1, 1] (clipped here);
 * optional ``observe(decision)``: a policy that needs more of the step output than the observation

@@ -1,7 +1,8 @@
 """Package layering (issue 14): ``formation_env`` imports neither ``agents`` nor ``train`` (only the
 console commands of ``formation_env.cli`` import ``train``, lazily); ``agents`` does not import
 ``train``; no import cycle between the top-level packages, between formation_env's subpackages, nor between
-formation_env's modules; files stay small.
+any two modules of formation_env, agents and train; no private name (``_x``) imported across a package boundary
+(formation_env, agents, train and their subpackages); files stay small.
 
 The static checks read the sources with :mod:`ast` and count every import: module level, inside
 functions, ``importlib.import_module("...")`` / ``__import__("...")`` with a literal name."""
@@ -315,61 +316,106 @@ def test_no_cycle_between_formation_env_subpackages():
                         "to be decided (see issue 14):\n" + _describe(cycles, edges))
 
 
-def _targets(found, modules) -> dict[str, int]:
-    """The modules of ``modules`` that the imports ``found`` (:func:`_scan`'s) name, each with its first line:
-    ``from p import x`` names ``p.x`` where that is a module, else ``p`` (``x`` an attribute of ``p``'s
-    ``__init__``); the parent packages Python initialises on the way are not edges."""
-    by_line: dict[int, list[str]] = {}
-    for name, line, _ in found:
-        by_line.setdefault(line, []).append(name)
-    out: dict[str, int] = {}
-    for line, names in sorted(by_line.items()):
-        for n in names:
-            children = [c for c in names if c.rpartition(".")[0] == n]
-            if children and all(c in modules for c in children):
-                continue  # ``from p import a, b`` of submodules: p is only the path to them
-            if n in modules:
-                out.setdefault(n, line)
-    return out
+def _modules() -> dict[str, Path]:
+    return {_module_name(p): p for pkg in TOP_PACKAGES for p in _py_files(pkg)}
 
 
-def _module_edges(package: str) -> dict[str, dict[str, list[str]]]:
-    """Edges module -> module inside ``package`` from every import (module level, in a function, under
-    ``TYPE_CHECKING``): a deferred import still makes the two modules one unit to read, test and change."""
-    files = {_module_name(p): p for p in _py_files(package)}
+def _module_edges() -> dict[str, dict[str, list[str]]]:
+    """Edges module -> module between the modules of formation_env, agents and train, from every import (module or
+    function level); ``from a import b`` is an edge to ``a.b`` where that is a module, else to ``a``. A module's
+    import of its own package (``__init__``) is left out: the package runs it first anyway."""
+    modules = _modules()
     edges: dict[str, dict[str, list[str]]] = {}
-    for mod, path in files.items():
-        for dst, line in _targets(_imports(path), files).items():
-            if dst != mod:
-                edges.setdefault(mod, {}).setdefault(dst, []).append(_where(path, line))
+    for src, p in modules.items():
+        for name, line, _ in _imports(p):
+            dst = name
+            while dst and dst not in modules:
+                dst = dst.rpartition(".")[0]
+            if not dst or dst == src or src.startswith(dst + "."):
+                continue
+            lst = edges.setdefault(src, {}).setdefault(dst, [])
+            if _where(p, line) not in lst:
+                lst.append(_where(p, line))
     return edges
 
 
-def test_module_cycle_finder_sees_deferred_type_checking_and_package_imports():
-    modules = {"p", "p.a", "p.b", "p.c", "p.d"}
-    sources = {
-        "p": "from .c import Y\nfrom .d import Z\n",
-        "p.a": "from . import b\n",  # the submodule b, not the package
-        "p.b": "def f():\n    from .a import X\n",  # deferred: still a cycle a <-> b
-        "p.c": "from typing import TYPE_CHECKING\nif TYPE_CHECKING:\n    from . import a\n",
-        "p.d": "def g():\n    from . import CONST\n",  # an attribute of p's __init__: p <-> d
-    }
-    edges = {m: {t: ["x"] for t in _targets(_scan(src, m, m == "p"), modules) if t != m}
-             for m, src in sources.items()}
-    assert edges["p.c"] == {"p.a": ["x"]} and edges["p.a"] == {"p.b": ["x"]}
-    assert _cycles(edges) == [["p", "p.d"], ["p.a", "p.b"]]
+# Module cycles known and tolerated exactly as they stand (each entry a sorted cycle; delete an entry with its fix).
+# Any other cycle, or one of these grown, fails.
+KNOWN_MODULE_CYCLES: tuple[list[str], ...] = ()
 
 
-def test_no_cycle_between_formation_env_modules():
-    """No two modules of formation_env import each other, directly or around a loop, at any level (a function's
-    import and a ``TYPE_CHECKING`` import count)."""
-    edges = _module_edges("formation_env")
-    cycles = _cycles(edges)
-    assert not cycles, "import cycles between formation_env modules (edge: importing file:line):\n" + \
-        _describe(cycles, edges)
+def test_no_cycle_between_modules():
+    """Module-level cycles across formation_env, agents and train (the subpackage test above cannot see a cycle
+    inside one subpackage, nor any in agents and train)."""
+    edges = _module_edges()
+    cycles = [c for c in _cycles(edges) if c not in KNOWN_MODULE_CYCLES]
+    assert not cycles, "import cycles between modules (edge: importing file:line):\n" + _describe(cycles, edges)
 
 
-# ---------------------------------------------------------------- (d) file size
+def test_module_cycle_finder_sees_the_package_graph():
+    edges = _module_edges()
+    assert "train.sb3.config" in edges["train.evaluation.policy_loader"]
+    assert "agents.registry" in edges["train.sb3.residual"]
+    assert all(not dst.startswith("agents.") or src.startswith(("agents.", "train."))
+               for src, d in edges.items() for dst in d)
+
+
+# ---------------------------------------------------------------- (d) private names stay inside their package
+
+def _package(module: str) -> str:
+    """The package that owns ``module``'s private names: its top-level package and, inside a subpackage of it,
+    that subpackage (``formation_env.sim``, ``train.sb3``); a top-level module belongs to the top-level package."""
+    parts = module.split(".")
+    if len(parts) >= 2 and (REPO / parts[0] / parts[1]).is_dir():
+        return ".".join(parts[:2])
+    return parts[0]
+
+
+def _private_part(name: str) -> tuple[str, str] | None:
+    """(owner, name) of the first private component of a dotted name (``a.b._c.d`` -> ``("a.b", "_c")``), dunders
+    excepted; None when it has none."""
+    parts = name.split(".")
+    for i, part in enumerate(parts[1:], start=1):
+        if part.startswith("_") and not (part.startswith("__") and part.endswith("__")):
+            return ".".join(parts[:i]), part
+    return None
+
+
+def _private_imports() -> list[str]:
+    found = []
+    for src, p in _modules().items():
+        for name, line, _ in _imports(p):
+            if _top(name) not in TOP_PACKAGES:
+                continue
+            private = _private_part(name)
+            if private is not None and _package(private[0]) != _package(src):
+                found.append(f"{_where(p, line)} imports {name} (private to {_package(private[0])})")
+    return sorted(set(found))
+
+
+# (importing file, private name) known and tolerated: both wake_surfing files move into the wake_surfing task
+# (issue 63, item 3), which removes the crossing; delete the entry with that move.
+KNOWN_PRIVATE_IMPORTS = (
+    ("train/publish/wake_surfing_records.py", "train.evaluation.wake_surfing_eval._rounded"),
+)
+
+
+def test_no_private_name_imported_across_packages():
+    bad = [b for b in _private_imports()
+           if not any(b.startswith(f"{f}:") and f" imports {n} " in b for f, n in KNOWN_PRIVATE_IMPORTS)]
+    assert not bad, "private names imported from another package (make them public or move the code):\n" + \
+        "\n".join(bad)
+
+
+def test_private_name_helpers():
+    assert _private_part("formation_env.cli._args.MAX_DURATION_S") == ("formation_env.cli", "_args")
+    assert _private_part("formation_env.cli.bench.__all__") is None
+    assert _private_part("train.evaluation.policy_loader.load_policy") is None
+    assert _package("formation_env.cli._args") == "formation_env.cli" and _package("formation_env.io") == "formation_env"
+    assert _package("train.sb3.residual") == "train.sb3" and _package("agents.registry") == "agents"
+
+
+# ---------------------------------------------------------------- (e) file size
 
 def test_no_source_file_over_500_lines():
     long = []

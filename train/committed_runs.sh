@@ -67,7 +67,7 @@ for scenario in formation_keeping close_formation reconfiguration wake_surfing w
     wall=$("$PY" -c "import json,sys; print(json.load(open(sys.argv[1]))['wall_s'])" "$run/summary.json")
     guard=()  # close_formation's policies fly through the guard's lateral clip (docs/close_formation.md)
     if [ "$scenario" = close_formation ]; then guard=(--guard '{"clip_ramp": 0.25}'); fi
-    "$PY" -m train.publish "$run" "${scenario}_ppo_setpoints_seed${seed}" --wall-s "$wall" ${guard[@]+"${guard[@]}"}
+    "$FE" publish run "$run" "${scenario}_ppo_setpoints_seed${seed}" --wall-s "$wall" ${guard[@]+"${guard[@]}"}
     if [ "$scenario" = echelon3 ]; then  # trained without the guard, flown through it (its default gains; docs/multi_agent.md)
       "$PY" - "train/policies/${scenario}_ppo_setpoints_seed${seed}.json" <<'PYEOF'
 import json, os, sys
@@ -84,5 +84,5 @@ done
 for seed in 0 1 2; do
   run="$RUNS/vee5_mappo_seed${seed}"
   wall=$("$PY" -c "import json,sys; print(json.load(open(sys.argv[1]))['wall_s'])" "$run/summary.json")
-  "$PY" -m train.publish "$run" "vee5_mappo_setpoints_seed${seed}" --wall-s "$wall"
+  "$FE" publish run "$run" "vee5_mappo_setpoints_seed${seed}" --wall-s "$wall"
 done

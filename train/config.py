@@ -24,10 +24,12 @@ from formation_env.tasks.base import TEST_SEED_BASE, VALIDATION_SEED_BASE  # noq
 # for tests, with a note in the log).
 MIN_VALIDATION_EPISODES = 32
 
-# The EnvConfig options a hyperparameter file's ``env_kwargs`` may set (both backends).
+# The EnvConfig options a hyperparameter file's ``env_kwargs`` may set (both backends): these, and every optional
+# observation group's switch (formation_env.sim.layout.OPTIONS, so a new group needs no entry here).
+from formation_env.sim.layout import OPTIONS as OBSERVATION_OPTIONS  # noqa: E402
+
 ENV_KEYS = {"control_hz", "wake", "collision_separation_b", "duration_s", "compute_benefit", "reward", "turbulence_field",
-            "wake_coupling", "wake_fidelity", "randomisation", "learning", "leader_reference",
-            "neighbour_wind", "neighbour_attitude"}
+            "wake_coupling", "wake_fidelity", "randomisation", "learning", "leader_reference", *OBSERVATION_OPTIONS}
 
 
 def load_yaml(path: str | Path) -> dict:
@@ -80,7 +82,7 @@ def with_task_env(params: dict, scenario: str) -> dict:
 def env_departures(scenario: str, env_kwargs: dict) -> dict:
     """What ``env_kwargs`` (a run's) sets differently from the task's benchmark configuration ({}: the benchmark
     task itself), as a mapping of the options (and reward / randomisation fields) that differ."""
-    from formation_env.envs.config import EnvConfig, Randomisation, RewardWeights
+    from formation_env.sim.config import EnvConfig, Randomisation, RewardWeights
 
     base = task_env_kwargs(scenario)
     out = {}
@@ -140,7 +142,7 @@ def config_section(data: dict, scenario: str) -> dict:
 def env_config_for(scenario: str, action_mode: str, env_kwargs: dict, **overrides):
     """The EnvConfig of a scenario, action mode and ``env_kwargs`` mapping (the hyperparameter files'
     format; ``learning`` defaults to followers; flat observations). Shared by both backends."""
-    from formation_env.envs.config import EnvConfig, Randomisation, RewardWeights
+    from formation_env.sim.config import EnvConfig, Randomisation, RewardWeights
 
     if not isinstance(env_kwargs, dict):
         raise ValueError(f"env_kwargs must be a mapping of EnvConfig options, got {env_kwargs!r}")

@@ -13,10 +13,11 @@ import importlib
 import os
 import sys
 
-from ..errors import ClusterUnreachableError, MissingDependencyError
+from ..errors import ClusterUnreachableError, MissingDependencyError, ShadowedPackageError
 from ._args import OneLineArgumentParser, check_out_path
 
-COMMANDS = ("verify", "bench", "demo", "trim", "modes", "run", "report", "replay", "train", "evaluate", "warmup", "docs", "results")
+COMMANDS = ("verify", "bench", "demo", "trim", "modes", "run", "report", "replay", "train", "evaluate", "warmup", "docs", "results",
+            "publish", "data")
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -83,6 +84,15 @@ def main(argv: list[str] | None = None) -> int:
 
 
 def _main(argv: list[str] | None) -> int:
+    # `python -m formation_env.cli` puts the working directory first on sys.path: a user's train.py there must not
+    # stand in for the project's train package that the commands import
+    try:
+        from .. import own_packages  # binds them on import
+
+        own_packages.bind()
+    except ShadowedPackageError as exc:
+        print(f"formation-env: error: {_one_line(exc)}", file=sys.stderr)
+        return 2
     parser = build_parser()
     try:
         args = parser.parse_args(argv)  # usage errors: one line, SystemExit(2)
@@ -97,7 +107,8 @@ def _main(argv: list[str] | None) -> int:
     except BrokenPipeError:
         raise
     except (ValueError, OSError, MissingDependencyError, ClusterUnreachableError) as exc:
-        print(f"formation-env {args.command}: error: {_one_line(exc)}", file=sys.stderr)
+        name = " ".join(n for n in (args.command, getattr(args, "action", None)) if n)  # e.g. "publish levels"
+        print(f"formation-env {name}: error: {_one_line(exc)}", file=sys.stderr)
         return 2
 
 

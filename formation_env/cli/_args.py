@@ -143,16 +143,16 @@ def check_policy_scenario(spec: str, scenario: str, *, allow: bool) -> None:
     if trained is None or trained == scenario:
         return
     from ..scenarios import get_scenario, scenario_names
-    from ..sim.observe import observation_size
+    from ..sim.layout import ObservationLayout
 
     if not allow:
         raise ValueError(f"--policy {spec!r} was trained for {trained!r}, not --scenario {scenario!r} (use "
                          f"--scenario {trained}, or pass --allow-scenario-mismatch)")
     sc = get_scenario(scenario)
-    size = observation_size(sc.n_vehicles, sc.neighbour_count)
+    size = ObservationLayout.of(sc.n_vehicles, sc.neighbour_count).size
     if trained in scenario_names():
         tr = get_scenario(trained)
-        own = observation_size(tr.n_vehicles, tr.neighbour_count)
+        own = ObservationLayout.of(tr.n_vehicles, tr.neighbour_count).size
         if own != size:
             raise ValueError(f"--policy {spec!r} was trained for {trained!r} (observations of {own}), --scenario "
                              f"{scenario!r} observes {size}: --allow-scenario-mismatch needs equal sizes")

@@ -61,11 +61,12 @@ def run(args) -> int:
     if args.json:
         print(json.dumps(results, indent=2))
     else:
-        _print_human(results)
+        print_human(results)
     return 0
 
 
-def _print_human(results: dict) -> None:
+def print_human(results: dict) -> None:
+    """The benchmark's report as text (``formation-env bench`` without ``--json``; docs/performance.md)."""
     m = results["machine"]
     print(f"machine: {m['cpus']} CPUs, Python {m['python']}")
     w = results.get("wake")

@@ -3,7 +3,9 @@ classical formation-keeping PID) on held-out seeds with the wake and Dryden turb
 results.json (summaries with 95 % intervals, paired comparisons against the baselines, seed groups and,
 for policies trained with several seeds, rliable's IQM / mean / median over seeds x episodes with
 stratified bootstrap intervals and the probability of improvement over each baseline), results.md,
-comparison plots, the performance profiles (performance_profile.png) and marl_eval.json."""
+comparison plots, the performance profiles (performance_profile.png) and marl_eval.json. With ``--task-report``, the
+task's own evaluation instead (its baselines, ceilings, metrics and statistics: ``train.evaluation.task_eval``, for a
+task that has one, e.g. wake_surfing)."""
 
 from __future__ import annotations
 
@@ -35,7 +37,7 @@ def register(sub) -> None:
     from ..wake.coupling import WAKE_FIDELITIES
 
     p = sub.add_parser("evaluate", help="evaluate policies against the PID baselines on held-out seeds (wake + turbulence)")
-    p.add_argument("--policy", action="append", required=True,
+    p.add_argument("--policy", action="append", default=None,
                    help="an SB3 .zip, an RLlib checkpoint, 'pid' (thesis FCS), 'pid_formation' (classical "
                         "formation-keeping PID) or 'station_keeper' (cross-track station keeper); repeat to compare several side by side (policies named "
                         "<name>_seed<k> are also reported as a seed group)")
@@ -83,14 +85,41 @@ def register(sub) -> None:
     p.add_argument("--out", default=None, help="output directory (default runs/eval-<scenario>-<timestamp>)")
     p.add_argument("--overwrite", action="store_true", help="allow an existing non-empty output directory")
     p.add_argument("--no-plots", action="store_true", help="write no figures (results.json, results.md, marl_eval.json)")
+    own = p.add_argument_group("a task's own evaluation (a task with evaluation hooks: wake_surfing and its variant)")
+    own.add_argument("--task-report", action="store_true",
+                     help="fly the task's own evaluation: its baselines and ceilings, each episode measured by the "
+                          "task's metrics, the task's statistics (SB3 zips as --policy)")
+    own.add_argument("--ceiling", action="append", default=None, metavar="SPEC",
+                     help="a ceiling to fly beside the controllers (the task's specs, e.g. oracle_keeper:0.05; "
+                          "default: the task's own); repeat for several, 'none' for none")
+    own.add_argument("--figure", default=None, help="write the task's figure with the first policy here")
+    own.add_argument("--tune", action="store_true", help="run the task's tuning sweep of a baseline instead")
     p.add_argument("--bootstrap-resamples", type=bounded_int(100, 1_000_000), default=None,
                    help="resamples of every bootstrap interval, 100..1000000 (default 10000)")
     p.set_defaults(func=run)
 
 
+def _run_task_report(args) -> int:
+    from train.evaluation.task_eval import run as run_task
+
+    seeds = args.seeds if args.seeds and len(args.seeds) > 1 else (
+        None if not args.seeds else [args.seeds[0] + i for i in range(args.episodes)])
+    levels = args.turbulence or [None]
+    if len(levels) > 1:
+        raise ValueError("--task-report takes one --turbulence level")
+    ceilings = None if args.ceiling is None else [c for c in args.ceiling if c != "none"]
+    return run_task(args.policy or [], scenario=args.scenario, episodes=args.episodes, seeds=seeds,
+                    turbulence_sigma_mps=levels[0], ceilings=ceilings, out=args.out, overwrite=args.overwrite,
+                    figure=args.figure, tune=args.tune)
+
+
 def run(args) -> int:
     from train.evaluation.evaluate import TEST_EPISODES, evaluate
 
+    if not args.task_report and (args.ceiling or args.figure or args.tune):
+        raise ValueError("--ceiling, --figure and --tune go with --task-report")
+    if not args.policy and not args.task_report:
+        raise ValueError("give at least one --policy")
     if args.episodes is not None and args.episodes < 1:
         raise ValueError(f"--episodes must be >= 1, got {args.episodes}")
     if args.seeds and len(set(args.seeds)) != len(args.seeds):
@@ -106,6 +135,13 @@ def run(args) -> int:
     from ..scenarios import get_scenario
 
     sc = get_scenario(args.scenario)  # unknown names fail before a policy loads
+    if args.task_report:
+        from pathlib import Path
+
+        missing = [p for p in args.policy or [] if not Path(p).is_file()]
+        if missing:
+            raise ValueError(f"policy file {missing[0]!r} does not exist")
+        return _run_task_report(args)
     if args.ablate:
         from train.evaluation.ablation import parse_ablation
 

@@ -104,7 +104,7 @@ def _fly_policy(policy, scenario: str, *, seed: int, wake: bool, turbulence: flo
 
     from ..replay import EpisodeRecorder
     from ..rollout import Recorder, rollout
-    from ..sim import Simulation
+    from ..tasks.compose import task_simulation
 
     class _Replay(Recorder):
         def start(self, sim, out) -> None:
@@ -116,9 +116,8 @@ def _fly_policy(policy, scenario: str, *, seed: int, wake: bool, turbulence: flo
 
     cfg = eval_env_config(scenario, policy.action_mode, turbulence_sigma_mps=turbulence, wake=wake,
                           control_hz=policy.control_hz, duration_s=duration_s,
-                          neighbour_wind=getattr(policy, "neighbour_wind", False),
-                          neighbour_attitude=getattr(policy, "neighbour_attitude", False))
-    sim = Simulation(cfg, batch_size=1)
+                          observation=getattr(policy, "observation", None))  # the policy's optional groups
+    sim = task_simulation(cfg, batch_size=1)  # a task's Python terms too (its policy observes them)
     rec = _Replay()
     res = rollout(sim, policy, [seed], recorders=[rec])
     status = "completed"

@@ -1,4 +1,4 @@
-"""``formation-env train``: train an SB3 policy (PPO, SAC or TD3) on a formation scenario, or, with
+"""``formation-env train``: train an SB3 policy (PPO, recurrent PPO, SAC or TD3) on a formation scenario, or, with
 ``--backend rllib``, multi-agent PPO on Ray RLlib (locally or on an existing Ray cluster).
 
 See ``train/sb3/train.py`` and ``train/rllib/backend.py`` for the run directory layouts and
@@ -42,7 +42,8 @@ def register(sub) -> None:
 
     from ..scenarios import scenario_names
 
-    p = sub.add_parser("train", help="train an SB3 policy (PPO/SAC/TD3) or RLlib multi-agent PPO on a formation scenario")
+    p = sub.add_parser("train", help="train an SB3 policy (PPO/recurrent PPO/SAC/TD3) or RLlib multi-agent PPO on a "
+                                     "formation scenario")
     p.add_argument("--backend", default="sb3", choices=("sb3", "rllib"),
                    help="sb3 (default): Stable-Baselines3 on the native VecEnv; rllib: multi-agent PPO on Ray RLlib "
                         "through the PettingZoo env (needs the 'distributed' extra)")

@@ -14,10 +14,20 @@ def register(sub) -> None:
     p = sub.add_parser("verify", help="reproduce the thesis tables and print them beside the thesis values")
     p.add_argument("--json", action="store_true", help="print JSON (keys table_5_2, table_5_3, table_5_4, ...)")
     p.add_argument("--section", action="append", metavar="KEY", help="only these sections (repeatable)")
+    p.add_argument("--converged-saving", action="store_true",
+                   help="instead of the thesis tables, the converged-saving table of docs/model/ell.md: each lattice's "
+                        "saving and winds against nseg 80 over the acceptance grid (minutes)")
     p.set_defaults(func=run)
 
 
 def run(args) -> int:
+    if args.converged_saving:
+        if args.json or args.section:
+            raise ValueError("--converged-saving prints its own table: leave out --json and --section")
+        from ..verification.converged_saving import print_table
+
+        print_table(lambda line: print(line, flush=True))
+        return 0
     sections = available_sections()
     keys = args.section or list(sections)
     unknown = [k for k in keys if k not in sections]

@@ -1,7 +1,6 @@
 """The thesis's PID flight control system (Appendix A): the baseline flight control law that the
 environments run under the RL agents (and that flies the scenarios of :mod:`formation_env.scenarios`).
-It lives inside the package so that ``formation_env`` never imports ``agents``;
-:mod:`agents.fcs` re-exports it.
+It lives inside the package so that ``formation_env`` never imports ``agents``.
 
 * :mod:`.gains`: Tables A.8-A.10, A.13 and the open structural choices (:class:`FCSStructure`).
 * :mod:`.law`: the compiled law, one aircraft per call (tracker A.5 -> autopilot A.4 -> attitude

@@ -1,6 +1,6 @@
 """Reinforcement-learning environments: PettingZoo parallel/AEC and single-agent Gymnasium."""
 
-from .config import ACTION_MODES, EnvConfig, Randomisation, RewardWeights
+from ..sim.config import ACTION_MODES, EnvConfig, Randomisation, RewardWeights
 from ..sim import INFO_REWARD_KEYS
 from .gym_env import GYM_IDS, FormationGymEnv, register_envs
 from .parallel import FormationParallelEnv

@@ -55,6 +55,7 @@ def _run(code_root: str | None, cases: list[dict], threads: int, busy: bool, bud
         shutil.copy(src, script)  # run outside both packages: the checkout under test is on PYTHONPATH
         root = code_root if code_root is not None else str(Path(__file__).resolve().parents[2])
         env["PYTHONPATH"] = root + os.pathsep + env.get("PYTHONPATH", "")
+        env["FORMATION_ENV_BENCH_ROOT"] = root  # where a case's task_file lies
         spin = _busy() if busy else None
         errors: list[str] = []
         try:
@@ -103,6 +104,11 @@ def run_benchmarks(quick: bool = False, baseline: str | None = None, busy: bool 
         for field in TURBULENCE_CASES] + [
         {"kind": "vector", "formations": 256, "mode": "setpoints", "learning": "followers", "scenario": name}
         for name in FORMATION_SIZE_CASES] + [
+        # a task written in Python (examples/custom_task.py: wake_surfing's scenario with Python reward, observation,
+        # termination and metric terms) beside the built-in task it starts from
+        {"kind": "vector", "formations": 256, "mode": "setpoints", "learning": "followers", "scenario": "wake_surfing"},
+        {"kind": "vector", "formations": 256, "mode": "setpoints", "learning": "followers", "scenario": "fuel_slot",
+         "task_file": "examples/custom_task.py"}] + [
         # the machine's own decision-to-decision spread (a fixed numpy workload), beside the env's
         {"kind": "machine"}]
     configs = [(2, False), (1, False)] + ([(2, True), (1, True)] if busy else [])

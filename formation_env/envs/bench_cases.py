@@ -1,11 +1,13 @@
 """Benchmark cases on the public env API only, so the same file measures this checkout and an older
-one (``python -m formation_env.envs.bench_cases CASES_JSON`` with the older checkout first on
-``PYTHONPATH``; :mod:`formation_env.envs.bench` runs it both ways in the same session).
+one (:mod:`formation_env.envs.bench` runs a copy of this file as a script, ``bench_cases_script.py CASES_JSON``, with
+either checkout first on ``PYTHONPATH``, both in the same session; an older checkout has no ``formation-env``
+subcommand for it).
 
 A case is a dict: ``{"kind": "single", "mode": ..., "learning": ...}`` (PettingZoo parallel env,
 B = 1) or ``{"kind": "vector", "formations": B, "mode": ..., "learning": ..., "wake_update_every": k,
-"benefit": bool, "turbulence": field name, "sigma": m/s, "scenario": name}`` (SB3 VecEnv; turbulence of that
-field at sigma, default 1 m/s; scenario default formation_keeping, e.g. ``vee5`` for a formation of 5) or ``{"kind": "machine"}`` (a fixed numpy workload: the machine's own timing spread). A
+"benefit": bool, "turbulence": field name, "sigma": m/s, "scenario": name, "task_file": path}`` (SB3 VecEnv;
+turbulence of that field at sigma, default 1 m/s; scenario default formation_keeping, e.g. ``vee5`` for a formation
+of 5; ``task_file``: a Python file of the checkout that registers the scenario's task, e.g. examples/custom_task.py) or ``{"kind": "machine"}`` (a fixed numpy workload: the machine's own timing spread). A
 vector case also reports the spread of 40 consecutive decisions timed one by one. A case the code under test cannot build (an older checkout without a newer option) gives
 ``{"unsupported": reason}`` instead of figures. All cases: formation_keeping, 2 Aerosondes, wake on, 10 Hz
 decisions (5 physics steps each), unless a vector case names another scenario. Result: the best of ``repeats`` timed runs after a warm-up run
@@ -69,10 +71,19 @@ def _vector(case: dict, budget_s: float, repeats: int) -> dict:
     if case.get("benefit"):
         opts["compute_benefit"] = True
     if case.get("turbulence"):
-        from formation_env.envs.config import Randomisation
+        from formation_env.sim.config import Randomisation
 
         opts["turbulence_field"] = case["turbulence"]
         opts["randomisation"] = Randomisation(turbulence_sigma_mps=case.get("sigma", 1.0))
+    if case.get("task_file"):  # a task defined in a Python file of the checkout (registered on import)
+        import importlib.util
+        import os
+
+        path = os.path.join(os.environ.get("FORMATION_ENV_BENCH_ROOT", "."), case["task_file"])
+        if not os.path.isfile(path):
+            return {**case, "unsupported": f"no {case['task_file']} in this checkout"}
+        spec = importlib.util.spec_from_file_location("bench_task_file", path)
+        spec.loader.exec_module(importlib.util.module_from_spec(spec))
     try:
         venv = FormationVecEnv(n, scenario=case.get("scenario", "formation_keeping"), learning=case["learning"],
                                action_mode=case["mode"], seed=0, **opts)

@@ -7,7 +7,7 @@ result on the task is trained with); the learner is the task's ``gym_learner`` (
 single UAV of a one-UAV scenario), the other UAVs fly the thesis PID.
 
 Keyword arguments of ``gymnasium.make`` replace options of the benchmark configuration
-(:class:`~formation_env.envs.config.EnvConfig`, e.g. ``action_mode="residual"``, ``randomisation=Randomisation(...)``),
+(:class:`~formation_env.sim.config.EnvConfig`, e.g. ``action_mode="residual"``, ``randomisation=Randomisation(...)``),
 plus ``learner`` (the UAV
 index; ``learning=(i,)`` means the same) and ``render_mode``. An unknown keyword raises ``TypeError``,
 a bad value ``ValueError``. An id fixes its scenario: ``scenario=`` (or a ``config``) naming another one is a
@@ -19,7 +19,7 @@ from __future__ import annotations
 import gymnasium as gym
 import numpy as np
 
-from .config import EnvConfig
+from ..sim.config import EnvConfig
 from ..tasks import make_config
 from .parallel import FormationParallelEnv
 
@@ -124,10 +124,11 @@ class FormationGymEnv(gym.Env):
 
 
 def register_envs() -> None:
-    """Registers :data:`GYM_IDS`, each with ``max_episode_steps`` = the scenario's duration x 10 Hz (one
+    """Registers :data:`GYM_IDS` (every registered task's id: call it again after registering a task of your own), each with ``max_episode_steps`` = the scenario's duration x 10 Hz (one
     episode at the default control rate; the env truncates there itself too). With a longer
     ``duration_s`` or a higher ``control_hz``, pass ``gym.make(id, max_episode_steps=N)`` (or ``-1``) so
     Gymnasium's TimeLimit does not cut the episode short."""
+    GYM_IDS.update(gym_ids())  # the tasks registered since import too (a task of the user's own)
     for env_id, (scenario, learner) in GYM_IDS.items():
         if env_id not in gym.registry:
             gym.register(env_id, entry_point="formation_env.envs.gym_env:FormationGymEnv",

@@ -12,43 +12,10 @@ The "slot frame" of an agent is its demanded track: x along the demanded ground 
 starboard of it, z down. The slot is the agent's demanded position (vehicle 0: its reference path;
 followers: vehicle 0's position plus the slot offset along vehicle 0's demanded track).
 
-==========================  ======  ================  =========  ==================================================
-group / feature             size    scaling           unit       meaning
-==========================  ======  ================  =========  ==================================================
-air_data                    3       /5, /0.1, /0.1    m/s, rad   airspeed - trim airspeed, alpha, beta (air-relative,
-                                                                 with the ambient and ELL-induced wind)
-attitude                    3       /0.5              rad        roll phi, pitch theta, heading psi minus demanded track
-rates                       3       /1                rad/s      body p, q, r
-altitude                    1       slog 10 m         m          altitude minus the scenario's altitude
-slot_position_error         3       slog 1 m          m          position minus slot, slot frame (along, starboard, down)
-slot_velocity_error         3       slog 1 m/s        m/s        ground velocity minus demanded velocity, slot frame
-induced_wind                3       /1                m/s        ELL effective induced translational wind, body axes
-induced_rotation            3       /1                rad/s      ELL effective induced rotational wind, body axes
-ambient_wind                3       slog 1 m/s        m/s        ambient wind (steady + gusts + turbulence), slot frame
-engine                      1       /545 - 1          rad/s      shaft speed
-previous_action             4       1                 -          the agent's previous normalised action
-slot_schedule               10      spans, slog, /10  b, m/s, s  the slot offset from vehicle 0 now (3, spans, track
-                                                                 frame), its rate (3, slog 1 m/s), the next keyframe's
-                                                                 offset minus the current one (3, spans), the time to
-                                                                 the next keyframe (min(t, 10 s) / 10; 1 when none
-                                                                 is left); zeros and 1 for vehicle 0
-controller_state            7       slog 1            SI         the PID's integrators and washout state
-                                                                 (agents.fcs CSTATE_NAMES; 0 when the PID is off)
-neighbours                  6(V-1)  slog 3 m, 1 m/s   m, m/s     each other UAV (index order): relative position, then
-                            or 6k                                relative velocity, in the agent's slot frame; with
-                                                                 ``neighbour_count`` k: the k UAVs whose slots are
-                                                                 nearest the agent's, nearest first (a missing one:
-                                                                 1 km behind, same velocity)
-neighbour_wind (option)     3(V-1)  slog 1 m/s        m/s        with ``EnvConfig(neighbour_wind=True)`` only: each
-                            or 3k                                neighbour of ``neighbours`` (same order): its
-                                                                 ambient wind minus the agent's, slot frame (a
-                                                                 missing one: 0)
-neighbour_attitude          3(V-1)  /0.5, /1, /0.5    rad,       with ``EnvConfig(neighbour_attitude=True)`` only
-(option)                    or 3k                     rad/s, rad (after the winds when both are on): each
-                                                                 neighbour of ``neighbours`` (same order): its roll,
-                                                                 roll rate and pitch minus the agent's (a missing
-                                                                 one: 0)
-==========================  ======  ================  =========  ==================================================
+The groups, in order, with their sizes, scaling, units and meaning are declared once, in
+:data:`formation_env.sim.layout.GROUPS` (the table below and docs/environments.md's are generated from it); the
+groups of one env's observations are its :class:`~formation_env.sim.layout.ObservationLayout`
+(``Simulation.observation_layout``).
 """
 
 from __future__ import annotations
@@ -58,14 +25,14 @@ import numpy as np
 # one table of scales, read by the compiled kernel (formation_env.sim.observe) and this documentation
 from ..sim.observe import (ALTITUDE_SCALE_M, CONTROLLER_STATE_SCALE, CONTROLLER_STATE_SIZE,
                            NEIGHBOUR_POSITION_SCALE_M, OBS_CLIP, OMEGA_REF, POSITION_SCALE_M, SCHEDULE_SIZE,
-                           VELOCITY_SCALE_MPS, WIND_SCALE_MPS, group_sizes, observation_size)
+                           VELOCITY_SCALE_MPS, WIND_SCALE_MPS)
+from ..sim.layout import GROUPS as _GROUPS
+from ..sim.layout import OPTIONS, ObservationLayout
 
-__all__ = ["OBS_CLIP", "GROUPS", "SCHEDULE_SIZE", "CONTROLLER_STATE_SIZE", "observation_size", "group_sizes",
-           "to_dict", "slog"]
+__all__ = ["OBS_CLIP", "GROUPS", "SCHEDULE_SIZE", "CONTROLLER_STATE_SIZE", "ObservationLayout", "observation_size",
+           "group_sizes", "to_dict", "slog", "groups_table"]
 
-GROUPS = ("air_data", "attitude", "rates", "altitude", "slot_position_error", "slot_velocity_error",
-          "induced_wind", "induced_rotation", "ambient_wind", "engine", "previous_action", "slot_schedule",
-          "controller_state", "neighbours", "neighbour_wind", "neighbour_attitude")
+GROUPS = tuple(g.name for g in _GROUPS)
 SCALES = (ALTITUDE_SCALE_M, CONTROLLER_STATE_SCALE, NEIGHBOUR_POSITION_SCALE_M, OMEGA_REF, POSITION_SCALE_M,
           VELOCITY_SCALE_MPS, WIND_SCALE_MPS)
 
@@ -75,13 +42,43 @@ def slog(x, scale):
     return np.sign(x) * np.log1p(np.abs(x) / scale)
 
 
-def to_dict(vector: np.ndarray, n_vehicles: int, neighbour_count: int | None = None,
-            neighbour_wind: bool = False, neighbour_attitude: bool = False) -> dict[str, np.ndarray]:
-    """Split one agent's flat observation into the named groups (``neighbour_count``, ``neighbour_wind``,
-    ``neighbour_attitude`` as the env's)."""
-    out, k = {}, 0
-    for name, size in group_sizes(n_vehicles, neighbour_count, neighbour_wind, neighbour_attitude).items():
-        if size:
-            out[name] = vector[..., k:k + size]
-        k += size
-    return out
+def _layout(n_vehicles, neighbour_count, switches, options) -> ObservationLayout:
+    """The layout of the helpers below: ``switches`` the optional groups' switches given positionally, in the order
+    of :data:`formation_env.sim.layout.OPTIONS`, ``options`` by name."""
+    if len(switches) > len(OPTIONS):
+        raise TypeError(f"at most {len(OPTIONS)} positional observation switches ({OPTIONS}), got {len(switches)}")
+    return ObservationLayout.of(n_vehicles, neighbour_count, dict(zip(OPTIONS, switches)), **options)
+
+
+def group_sizes(n_vehicles: int, neighbour_count: int | None = None, *switches: bool, **options: bool) -> dict[str, int]:
+    """Size of each observation group for V UAVs (``neighbour_count`` k: k neighbours observed, whatever V; the
+    optional groups' switches, EnvConfig's, by name or in the order of ``OPTIONS``): :attr:`ObservationLayout.groups`."""
+    return _layout(n_vehicles, neighbour_count, switches, options).groups
+
+
+def observation_size(n_vehicles: int, neighbour_count: int | None = None, *switches: bool, **options: bool) -> int:
+    """Length D of one UAV's flat observation (arguments as :func:`group_sizes`): :attr:`ObservationLayout.size`."""
+    return _layout(n_vehicles, neighbour_count, switches, options).size
+
+
+def to_dict(vector: np.ndarray, n_vehicles, neighbour_count: int | None = None, *switches: bool,
+            **options: bool) -> dict[str, np.ndarray]:
+    """Split flat observations (..., D) into the named groups: ``n_vehicles`` an :class:`ObservationLayout` (the
+    env's: ``Simulation.observation_layout``), or a formation size with the arguments of :func:`group_sizes`."""
+    layout = n_vehicles if isinstance(n_vehicles, ObservationLayout) else _layout(n_vehicles, neighbour_count,
+                                                                                  switches, options)
+    return layout.split(vector)
+
+
+def groups_table() -> list[str]:
+    """The groups as a markdown table (docs/environments.md's): name, size, scaling, unit, meaning."""
+    rows = ["| group | size | scaling | unit | meaning |", "|---|---|---|---|---|"]
+    for g in _GROUPS:
+        size = f"{g.size} per neighbour" if g.per_neighbour else str(g.size)
+        meaning = (f"option `{g.option}=True`: " if g.option else "") + g.meaning
+        rows.append(f"| `{g.name}` | {size} | {g.scaling} | {g.unit} | {meaning} |")
+    return rows
+
+
+if __doc__:  # None under python -OO
+    __doc__ += "\n" + "\n".join(groups_table()) + "\n"

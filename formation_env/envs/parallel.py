@@ -20,12 +20,12 @@ import numpy as np
 from gymnasium import spaces
 from pettingzoo import ParallelEnv
 
-from ..sim import Simulation
 from ..sim.validation import check_action, check_seed
 from ..sim.validation import clipped_values as _clipped_values
 from ..tasks import make_config
-from .config import EnvConfig
-from .observations import OBS_CLIP, group_sizes, to_dict
+from ..sim.config import EnvConfig
+from ..tasks.compose import task_simulation
+from .observations import OBS_CLIP
 
 __all__ = ["FormationParallelEnv", "make_config", "check_action", "reset_options", "IGNORED_RESET_OPTIONS"]
 
@@ -61,7 +61,10 @@ class FormationParallelEnv(ParallelEnv):
         if render_mode is not None and render_mode not in self.metadata["render_modes"]:
             raise ValueError(f"render_mode must be one of {self.metadata['render_modes']} or None, got {render_mode!r}")
         self.render_mode = render_mode
-        self.sim = Simulation(self.config, batch_size=1)  # the episode's state lives there, nowhere else
+        # the episode's state lives there, nowhere else (with the task's Python terms composed after the step)
+        self.sim = task_simulation(self.config, batch_size=1)
+        self.observation_layout = self.sim.observation_layout  # the groups of one observation (and the Dict's keys)
+        self._out = None  # the last reset's or step's output
         n = self.sim.n_vehicles
         self.agent_indices = self.sim.agent_indices
         self.substeps = self.sim.substeps
@@ -71,7 +74,7 @@ class FormationParallelEnv(ParallelEnv):
         self.agents: list[str] = []
         if self.config.obs_mode == "dict":
             self._obs_space = spaces.Dict({k: spaces.Box(-OBS_CLIP, OBS_CLIP, (s,), dtype=np.float32)
-                                           for k, s in group_sizes(n, self.sim.neighbour_count, self.sim.neighbour_wind, self.sim.neighbour_attitude).items() if s})
+                                           for k, s in self.sim.observation_layout.groups.items() if s})
         else:
             self._obs_space = spaces.Box(-OBS_CLIP, OBS_CLIP, (self.sim.obs_size,), dtype=np.float32)
         self._act_space = spaces.Box(-1.0, 1.0, (4,), dtype=np.float32)
@@ -109,7 +112,7 @@ class FormationParallelEnv(ParallelEnv):
             # Gymnasium's convention: a seed also seeds the stream later unseeded resets draw from, so a
             # trainer that seeds only the first reset (RLlib's env runners do) replays exactly.
             self._entropy = np.random.SeedSequence(int(seed))
-        self.sim.reset(seeds=[int(seed)], options=sim_options)
+        self._out = self.sim.reset(seeds=[int(seed)], options=sim_options)
         self._was_reset = True
         self.agents = list(self.possible_agents)
         return self._observations(), self._infos()
@@ -120,7 +123,7 @@ class FormationParallelEnv(ParallelEnv):
         if not self.agents:
             raise RuntimeError("step() called on a finished episode; call reset() first")
         act = self._validate_actions(actions)
-        out = self.sim.step(act[None])
+        out = self._out = self.sim.step(act[None])
         rewards_all, done, trunc = out.reward, bool(out.terminated[0]), bool(out.truncated[0])
         obs = self._observations()
         infos = self._infos()
@@ -136,7 +139,9 @@ class FormationParallelEnv(ParallelEnv):
 
     def state(self) -> np.ndarray:
         """Global state: every UAV's observation vector, concatenated (float32)."""
-        return self.sim.output.observation[0].reshape(-1).astype(np.float32)
+        obs = self._out.observation if self._out is not None else \
+            getattr(self.sim, "observation", self.sim.output.observation)  # before any reset: the initial arrays
+        return obs[0].reshape(-1).astype(np.float32)
 
     def render(self):
         if self.render_mode is None:
@@ -175,9 +180,9 @@ class FormationParallelEnv(ParallelEnv):
         return act
 
     def _observations(self) -> dict:
-        allobs = self.sim.output.observation[0].astype(np.float32)
-        n = self.sim.n_vehicles
-        return {a: to_dict(allobs[i], n, self.sim.neighbour_count, self.sim.neighbour_wind, self.sim.neighbour_attitude) if self.config.obs_mode == "dict" else allobs[i] for a, i in self._index.items()}
+        allobs = self._out.observation[0].astype(np.float32)
+        split = self.observation_layout.split
+        return {a: split(allobs[i]) if self.config.obs_mode == "dict" else allobs[i] for a, i in self._index.items()}
 
     def _infos(self) -> dict:
         per_vehicle = self.sim.infos(0)

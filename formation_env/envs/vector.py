@@ -26,11 +26,11 @@ from gymnasium import spaces
 from gymnasium.vector import AutoresetMode
 from stable_baselines3.common.vec_env.base_vec_env import VecEnv
 
-from ..sim import Simulation
 from ..sim.validation import MAX_SEED, check_actions, check_count, check_seed
-from .config import EnvConfig
+from ..sim.config import EnvConfig
 from .observations import OBS_CLIP
 from ..tasks import make_config
+from ..tasks.compose import task_simulation
 
 __all__ = ["FormationVecEnv", "FormationVectorEnv", "BatchedFormations", "OneObjectVecEnvMethods"]
 
@@ -78,7 +78,8 @@ class BatchedFormations:
         n_formations = _check_n_formations(n_formations)
         if config.obs_mode != "flat":
             raise ValueError("vector envs use flat observations (obs_mode='flat')")
-        self.sim = Simulation(config, batch_size=n_formations)
+        self.sim = task_simulation(config, batch_size=n_formations)  # the task's Python terms composed after the step
+        self._out = None  # the last output
         self.n_formations = self.sim.batch_size
         self.agents = list(self.sim.agent_indices)
         self.agents_per_formation = len(self.agents)
@@ -112,11 +113,11 @@ class BatchedFormations:
 
     def reset(self, formations=None) -> None:
         idx = np.arange(self.n_formations) if formations is None else np.asarray(formations, dtype=np.int64)
-        self.sim.reset(idx, self._seeds_for(idx))
+        self._out = self.sim.reset(idx, self._seeds_for(idx))
         self.was_reset = True
 
     def observations(self) -> np.ndarray:
-        obs = self.sim.output.observation[:, self.agents]
+        obs = self._out.observation[:, self.agents]
         return obs.reshape(self.num_envs, -1).astype(np.float32)
 
     def validate(self, actions) -> np.ndarray:
@@ -129,7 +130,7 @@ class BatchedFormations:
         if not self.was_reset:
             raise RuntimeError("step() before any reset(): call reset() first")
         a = self.validate(actions).reshape(self.n_formations, self.agents_per_formation, 4)
-        out = self.sim.step(a)
+        out = self._out = self.sim.step(a)
         rewards, term_f, trunc_f = out.reward[:, self.agents].reshape(-1), out.terminated.copy(), out.truncated.copy()
         rep = self.agents_per_formation
         terminated, truncated = np.repeat(term_f, rep), np.repeat(trunc_f, rep)
@@ -174,6 +175,7 @@ class FormationVecEnv(OneObjectVecEnvMethods, VecEnv):
         cfg = make_config(config, **options)
         self.batch = BatchedFormations(n_formations, cfg, seed)
         self.config = cfg
+        self.observation_layout = self.batch.sim.observation_layout  # the groups of one observation
         self.detailed_infos = bool(detailed_infos)
         obs_space = spaces.Box(-OBS_CLIP, OBS_CLIP, (self.batch.obs_size,), dtype=np.float32)
         act_space = spaces.Box(-1.0, 1.0, (4,), dtype=np.float32)
@@ -250,6 +252,7 @@ class FormationVectorEnv(gym.vector.VectorEnv):
         cfg = make_config(config, **options)
         self.batch = BatchedFormations(n_formations, cfg, seed)
         self.config = cfg
+        self.observation_layout = self.batch.sim.observation_layout  # the groups of one observation
         self.num_envs = self.batch.num_envs
         self.single_observation_space = spaces.Box(-OBS_CLIP, OBS_CLIP, (self.batch.obs_size,), dtype=np.float32)
         self.single_action_space = spaces.Box(-1.0, 1.0, (4,), dtype=np.float32)

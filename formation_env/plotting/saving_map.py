@@ -79,17 +79,3 @@ def plot_map(path, cache: dict | None = None, *, y_b=None, z_b=None, overwrite: 
     fig.tight_layout()
     return save_figure(fig, path, overwrite=overwrite, dpi=80)
 
-
-def main(argv=None) -> int:
-    """``python -m formation_env.plotting.saving_map PATH``: draw the figure from the cached map."""
-    import argparse
-
-    p = argparse.ArgumentParser(description="Draw the close-formation saving map figure (PNG).")
-    p.add_argument("path")
-    a = p.parse_args(argv)
-    print(f"wrote {plot_map(a.path)}")
-    return 0
-
-
-if __name__ == "__main__":
-    raise SystemExit(main())

@@ -1,6 +1,6 @@
 """Scenario figures in the thesis's chapter 6 style (strip charts against time, one line per
 vehicle and run): position parameters and errors, air data, Euler angles, controls, induced wind,
-and the ground track. Input: runs from :func:`agents.run.run_scenario` (their ``time`` and
+and the ground track. Input: runs from :func:`formation_env.runs.runner.run_scenario` (their ``time`` and
 ``h`` histories); this module only reads arrays."""
 
 from __future__ import annotations

@@ -103,7 +103,7 @@ class Scenario:
     slot_frame: str = "leader_demand"
     # the followers' safe box relative to vehicle 0, spans, slot frame: ((x_lo, x_hi), (y_lo, y_hi),
     # (z_lo, z_hi)); None: no box. In ``setpoints`` mode the agent's set-point spans the box (see
-    # formation_env.envs.actions) and the reward's ``box`` term charges leaving it.
+    # formation_env.sim.params.setpoint_ranges) and the reward's ``box`` term charges leaving it.
     safe_box_b: tuple | None = None
     # spans the ``setpoints`` action reaches beyond the safe box on each side, per axis (along, starboard, down;
     # the along-track set-point stays fixed): the box is the reward's constraint, and a set-point map that stops

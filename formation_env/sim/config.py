@@ -14,6 +14,7 @@ from dataclasses import dataclass, field, fields
 import numpy as np
 
 from ..constants import MAX_DURATION_S
+from .layout import OPTIONS as OBSERVATION_OPTIONS
 
 __all__ = ["ACTION_MODES", "OBS_MODES", "TURBULENCE_FIELDS", "TURBULENCE_FIELD_ALIASES", "OPTION_RANGES", "RewardWeights",
            "Randomisation", "EnvConfig"]
@@ -280,7 +281,8 @@ class EnvConfig:
     scenario: a name from :func:`formation_env.scenarios.scenario_names`, or a Scenario object.
     learning: which UAVs are agents: "all", "followers" (vehicle 0 flies the PID baseline on its
         path: a scripted leader) or a tuple of vehicle indices.
-    action_mode: "surfaces" | "residual" | "setpoints" (see :mod:`formation_env.envs.actions`).
+    action_mode: "surfaces" | "residual" | "setpoints" (what each action means: the environments
+        page, "Action space"; the scales: :mod:`formation_env.sim.params`).
     control_hz: agent decision rate; the physics runs at 1 / scenario dt (50 Hz) and the action is
         held in between. Must divide the physics rate.
     wake: ELL wake coupling on or off (None: the scenario's default).
@@ -429,12 +431,10 @@ class EnvConfig:
                 raise ValueError(f"EnvConfig: neighbour_count must be None (the scenario's), 0 (every other UAV) or an "
                                  f"integer in 1..64, got {k!r}")
             object.__setattr__(self, "neighbour_count", int(k))
-        if not isinstance(self.neighbour_wind, (bool, np.bool_)):
-            raise ValueError(f"EnvConfig: neighbour_wind must be True or False, got {self.neighbour_wind!r}")
-        object.__setattr__(self, "neighbour_wind", bool(self.neighbour_wind))
-        if not isinstance(self.neighbour_attitude, (bool, np.bool_)):
-            raise ValueError(f"EnvConfig: neighbour_attitude must be True or False, got {self.neighbour_attitude!r}")
-        object.__setattr__(self, "neighbour_attitude", bool(self.neighbour_attitude))
+        for name in OBSERVATION_OPTIONS:  # the optional observation groups' switches (formation_env.sim.layout)
+            if not isinstance(getattr(self, name), (bool, np.bool_)):
+                raise ValueError(f"EnvConfig: {name} must be True or False, got {getattr(self, name)!r}")
+            object.__setattr__(self, name, bool(getattr(self, name)))
         if not isinstance(self.compute_benefit, (bool, np.bool_)):
             raise ValueError(f"EnvConfig: compute_benefit must be True or False, got {self.compute_benefit!r}")
         object.__setattr__(self, "compute_benefit", bool(self.compute_benefit))

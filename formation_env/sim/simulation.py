@@ -27,7 +27,7 @@ envs reset finished formations within the same call (auto-reset), so they never 
 rollout that steps on until its last formation ends reads the finished ones unchanged.
 
 Shapes: B formations, V UAVs, A agents (the UAVs the actions command; the others fly the thesis PID),
-D the observation size. Units SI, frames NED earth and body (x forward, y starboard, z down).
+D the observation size (its groups: ``observation_layout``). Units SI, frames NED earth and body (x forward, y starboard, z down).
 """
 
 from __future__ import annotations
@@ -51,7 +51,8 @@ from ..wake.loads import isolated_model
 from .config import EnvConfig
 from .formation import WakeConfig, resolve_fidelity, resolve_wake, wake_model_for, wake_vehicle, wing_origin_body
 from .infos import INFO_REWARD_KEYS, InfoArrays, reward_info_key, separation_each
-from .observe import REWARD_TERMS, observation_size
+from .layout import ObservationLayout
+from .observe import REWARD_TERMS
 from .params import (TURBULENCE_CODES, ActionParams, RewardParams, StepParams, aircraft_arrays, scenario_arrays,
                      turbulence_params, wake_arrays)
 from .state import StepOutput, init_output, init_state
@@ -128,8 +129,7 @@ class Simulation:
         self.wake = sc.wake_default if config.wake is None else config.wake
         # the neighbours each agent observes (0: every other UAV; k: the k nearest by slot)
         self.neighbour_count = sc.neighbour_count if config.neighbour_count is None else config.neighbour_count
-        self.neighbour_wind = bool(config.neighbour_wind)  # their ambient winds observed too
-        self.neighbour_attitude = bool(config.neighbour_attitude)  # and their attitude
+        self.observation_layout = ObservationLayout.for_config(config)  # the groups and sizes of an observation
         self.trim = trim(sc.airspeed_mps, sc.altitude_m)
         fc = PIDFlightControl.from_trim(self.trim, dt=sc.dt, throttle_limits=(0.0, config.throttle_max)).config
         self.surface_limit_rad = float(fc.surface_limit_rad)
@@ -170,8 +170,8 @@ class Simulation:
             fcs=fcs_params(fc, sc.dt), action=self._action_params(config), reward=self._reward_params(config),
             field=turbulence_params(sc, sigma, config.turbulence_field), trim_airspeed_mps=float(sc.airspeed_mps),
             coupling=coupling_arrays(lattice, self.wake_coupling, AEROSONDE), neighbour_count=self.neighbour_count,
-            neighbour_wind=self.neighbour_wind, neighbour_attitude=self.neighbour_attitude)
-        self.obs_size = observation_size(v, self.neighbour_count, self.neighbour_wind, self.neighbour_attitude)
+            **self.observation_layout.switches())
+        self.obs_size = self.observation_layout.size
         # the memory the batch needs, from one formation's arrays, checked before the batch's are allocated
         one = _batch_arrays(init_state(1, v, lattice.n_panels, self.params.field), init_output(1, v, self.obs_size))
         check_batch_size(self.batch_size, sum(a.nbytes for a in one) + 2 * v * 4 * 8, scenario=sc.name)

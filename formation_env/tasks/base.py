@@ -13,13 +13,12 @@ one unit under :mod:`formation_env.tasks` and calling :func:`register_task`; its
 from __future__ import annotations
 
 import dataclasses
-import importlib
 import re
-from collections.abc import Callable
 from dataclasses import dataclass, field
 
 from ..scenarios import Scenario, get_scenario, register_scenario
 from ..sim.config import EnvConfig, Randomisation, RewardWeights
+from .terms import TaskTerms
 
 __all__ = ["Task", "EvaluationProtocol", "register_task", "get_task", "task_names", "TASKS", "task_options",
            "task_for_scenario", "make_config", "gym_ids", "task_learning", "TEST_SEED_BASE", "VALIDATION_SEED_BASE",
@@ -82,8 +81,13 @@ class Task:
     ``options``: the EnvConfig options the task is posed with (``parallel_env``, the Gymnasium id and
     ``make_config`` start from them; given options override them); ``gym_id``/``gym_learner``: its
     single-agent Gymnasium id and learner index; ``baselines``: names of the agents it is judged against;
-    ``reference``: the reference optimum (a module or object, None where the task has none); ``metrics``:
-    a callable making the task's own per-episode metrics (None: the generic evaluation table);
+    ``reference``: the reference optimum (an object with ``optimum_saving()``, e.g. a module; None where the task
+    has none); ``metrics``: the task's own per-episode metrics, an object with ``recorder()`` (a
+    :class:`formation_env.rollout.Recorder`) and ``episodes(recorder, result, keep_series=False)`` (one dict per
+    episode; None: the :class:`~formation_env.tasks.terms.MetricTerm` s of ``terms``, if any);
+    ``terms``: the task's Python reward, observation, termination and metric terms
+    (:class:`~formation_env.tasks.terms.TaskTerms`), composed after the compiled step; ``evaluator``: the task's
+    own evaluation hooks (:class:`~formation_env.tasks.evaluation.TaskEvaluation`; None: the generic evaluation);
     ``test_randomisation``: :class:`~formation_env.sim.config.Randomisation` fields the held-out test set (and
     the training's validation) draws besides the turbulence level, so that even calm-air episodes differ;
     ``learning``: the UAVs that are agents when the task is trained and evaluated (an EnvConfig ``learning``:
@@ -105,7 +109,7 @@ class Task:
     options: dict = field(default_factory=dict)
     baselines: tuple = ("pid", "pid_formation")
     reference: object = None
-    metrics: Callable | None = None
+    metrics: object = None
     description: str = ""
     test_randomisation: dict = field(default_factory=dict)
     learning: str = "followers"
@@ -113,8 +117,21 @@ class Task:
     guard: str | None = None
     guard_options: dict = field(default_factory=dict)
     evaluation: EvaluationProtocol = field(default_factory=EvaluationProtocol)
+    terms: TaskTerms | None = None
+    evaluator: object = None
 
     def __post_init__(self) -> None:
+        for name in ("reference", "metrics", "evaluator"):
+            if isinstance(getattr(self, name), str):
+                raise ValueError(f"Task.{name} must be an object (a module or instance), not an import string: "
+                                 f"got {getattr(self, name)!r}")
+        if self.terms is not None and not isinstance(self.terms, TaskTerms):
+            raise ValueError(f"Task.terms must be a TaskTerms or None, got {self.terms!r}")
+        if self.metrics is None and self.terms is not None and self.terms.metrics:
+            object.__setattr__(self, "metrics", self.terms.episode_metrics())
+        if self.metrics is not None and not all(callable(getattr(self.metrics, m, None))
+                                                for m in ("recorder", "episodes")):
+            raise ValueError(f"Task.metrics must have recorder() and episodes(); got {self.metrics!r}")
         if self.learning not in ("followers", "all"):
             raise ValueError(f"Task.learning must be 'followers' or 'all', got {self.learning!r}")
         if isinstance(self.version, bool) or not isinstance(self.version, int) or self.version < 0:
@@ -173,10 +190,7 @@ class Task:
         """The follower's induced-drag saving at the reference optimum of the task's allowed region in calm
         air (the denominator of the evaluations' ``harvest_ratio``): the reference's ``optimum_saving()``;
         None for a task without a reference or whose reference has no such optimum."""
-        if self.reference is None:
-            return None
-        ref = importlib.import_module(self.reference) if isinstance(self.reference, str) else self.reference
-        fn = getattr(ref, "optimum_saving", None)
+        fn = getattr(self.reference, "optimum_saving", None)
         return None if fn is None else float(fn())
 
 

@@ -105,9 +105,3 @@ def record_new_versions(path: Path = VERSIONS_FILE) -> list[str]:
         tmp.replace(path)
     return added
 
-
-if __name__ == "__main__":  # python -m formation_env.tasks.versions: record the ids not yet in the table
-    import formation_env  # noqa: F401  (registers the ids)
-
-    for gid in record_new_versions():
-        print(f"recorded {gid}")

@@ -8,7 +8,7 @@ alpha), the ELL is the energy tasks' lift-matched wing (:class:`~formation_env.s
 (:func:`formation_env.wake.benefit.induced_drag_saving_one`) and the winds from
 :func:`formation_env.wake.coupling.coupled_wind` (both couplings, the follower's, NED).
 
-``python -m formation_env.verification.converged_saving`` prints the table of docs/ell.md for the lattices
+``formation-env verify --converged-saving`` prints the table of docs/ell.md for the lattices
 this checkout has (nseg 10 with and without the span correction, with the sheet law, with the residual table
 of pairs, nseg 40 and 160 against
 nseg 80); the residual table's :func:`residual_table_errors` with the sheet law as its base (e.g.
@@ -26,7 +26,7 @@ import numpy as np
 from ..constants import AEROSONDE_SPAN_M
 
 __all__ = ["GRID_Y_B", "GRID_Z_B", "follower_maps", "local_maxima", "lateral_maxima", "map_errors",
-           "residual_table_errors", "echelon_savings", "pairwise_residual_errors"]
+           "residual_table_errors", "echelon_savings", "pairwise_residual_errors", "print_table"]
 
 GRID_Y_B = np.round(np.arange(0.70, 1.20 + 1e-9, 0.02), 6)
 GRID_Z_B = np.round(np.arange(-0.10, 0.30 + 1e-9, 0.02), 6)
@@ -194,7 +194,9 @@ def pairwise_residual_errors(base=None, reference=None, *, trials: int = 12, see
     return out
 
 
-def main() -> None:
+def print_table(log=print) -> None:
+    """``formation-env verify --converged-saving``: the table of docs/model/ell.md, one ``log`` line per lattice
+    configuration as it is measured."""
     from ..sim.formation import WakeConfig
 
     reference = follower_maps(WakeConfig(nseg=80))
@@ -203,14 +205,11 @@ def main() -> None:
              "nseg 10, sheet law + span corr.": WakeConfig(sheet=True, span_correction=True),
              "nseg 10, sheet + span + residual table": WakeConfig(sheet=True, span_correction=True, residual_table=True),
              "nseg 40": WakeConfig(nseg=40), "nseg 160": WakeConfig(nseg=160)}
-    print("against nseg 80; % of the reference's peak (saving) or largest |component| (winds y / z)")
+    log("against nseg 80; % of the reference's peak (saving) or largest |component| (winds y / z)")
     for label, cfg in cases.items():
         e = map_errors(follower_maps(cfg), reference)
-        print(f"{label:38s} saving {100 * e['saving']:5.1f} % (|z| >= 0.1 b {100 * e['saving_off_plane']:4.1f} %), "
-              f"peak {e['peak']:.3f} at ({e['peak_y_b']:.2f}, {e['peak_z_b']:.2f}) b, maxima {e['local_maxima']} / "
-              f"{e['lateral_maxima']}; load_weighted {100 * e['load_weighted_y']:.1f} / {100 * e['load_weighted_z']:.1f} %, "
-              f"effective_wind {100 * e['effective_wind_y']:.1f} / {100 * e['effective_wind_z']:.1f} %")
+        log(f"{label:38s} saving {100 * e['saving']:5.1f} % (|z| >= 0.1 b {100 * e['saving_off_plane']:4.1f} %), "
+            f"peak {e['peak']:.3f} at ({e['peak_y_b']:.2f}, {e['peak_z_b']:.2f}) b, maxima {e['local_maxima']} / "
+            f"{e['lateral_maxima']}; load_weighted {100 * e['load_weighted_y']:.1f} / {100 * e['load_weighted_z']:.1f} %, "
+            f"effective_wind {100 * e['effective_wind_y']:.1f} / {100 * e['effective_wind_z']:.1f} %")
 
-
-if __name__ == "__main__":
-    main()

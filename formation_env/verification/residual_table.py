@@ -2,7 +2,7 @@
 "Converged saving"): one pair's outputs on a grid of relative poses with the fine and the base lattice, their
 difference, and the command that writes the shipped table.
 
-``python -m formation_env.verification.residual_table [--processes 2] [--force]`` (243 s on 2 cores).
+``formation-env data residual-table [--processes 2] [--force]``.
 """
 
 from __future__ import annotations
@@ -13,7 +13,7 @@ import numpy as np
 
 from ..wake.residual import N_VALUES, TABLE_PATH, VALUE_SAVING, VALUE_WIND, TableGrid, save_table
 
-__all__ = ["FINE", "BASE", "pair_values", "build_table", "main"]
+__all__ = ["FINE", "BASE", "pair_values", "build_table", "build"]
 
 
 # ---------------------------------------------------------------------------------------------------------------
@@ -113,37 +113,31 @@ def build_table(grid: TableGrid = TableGrid(), processes: int = 2, progress=None
             "span_m": AEROSONDE_SPAN_M, "source_lift_m3ps": float(lift)}
 
 
-def main(argv=None) -> int:
-    import argparse
+def build(out: str | Path = TABLE_PATH, *, processes: int = 2, force: bool = False, log=print) -> str:
+    """``formation-env data residual-table``: build the table with ``processes`` worker processes and write it to
+    ``out`` (an existing table only with ``force``). Returns the line naming what was written; a bad value is a
+    ValueError naming it before any solve."""
     import subprocess
-    import sys
     import time
 
-    ap = argparse.ArgumentParser(prog="python -m formation_env.verification.residual_table",
-                                 description="Build the ELL residual table of pairs (docs/ell.md).")
-    ap.add_argument("--out", type=Path, default=TABLE_PATH)
-    ap.add_argument("--processes", type=int, default=2)
-    ap.add_argument("--force", action="store_true", help="replace an existing table")
-    a = ap.parse_args(argv)
-    if a.processes < 1:
-        print(f"--processes must be >= 1, got {a.processes}", file=sys.stderr)
-        return 2
-    if a.out.exists() and not a.force:
-        print(f"{a.out} exists; --force replaces it", file=sys.stderr)
-        return 2
+    out = Path(out)
+    if isinstance(processes, bool) or not isinstance(processes, int) or not 1 <= processes <= 64:
+        raise ValueError(f"--processes must be an integer in [1, 64], got {processes!r}")
+    if out.exists() and not force:
+        raise ValueError(f"{str(out)!r} exists; --force replaces it")
     t0 = time.time()
-    d = build_table(processes=a.processes,
-                    progress=lambda k, n: print(f"  {k}/{n} planes, {time.time() - t0:.0f} s", flush=True))
+    d = build_table(processes=processes, progress=lambda k, n: log(f"  {k}/{n} planes, {time.time() - t0:.0f} s"))
     try:
         rev = subprocess.run(["git", "rev-parse", "--short", "HEAD"], capture_output=True, text=True,
                              cwd=Path(__file__).parent).stdout.strip()
     except OSError:
         rev = "unknown"
-    prov = (f"python -m formation_env.verification.residual_table --processes {a.processes}; grid {TableGrid()}; fine {FINE}, "
+    prov = (f"formation-env data residual-table --processes {processes}; grid {TableGrid()}; fine {FINE}, "
             f"base {BASE}; built at {rev} in {time.time() - t0:.0f} s")
-    print(save_table(d, a.out, overwrite=a.force, provenance=prov), prov)
-    return 0
+    return f"{save_table(d, out, overwrite=force, provenance=prov)} {prov}"
 
 
-if __name__ == "__main__":
-    raise SystemExit(main())
+if __name__ == "__main__":  # the command named by formation_env.wake.residual's message when the table is missing
+    import sys
+
+    sys.exit("the residual table is built by `formation-env data residual-table [--processes N] [--force]`")

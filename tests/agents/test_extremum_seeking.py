@@ -1,17 +1,21 @@
 """The extremum-seeking baseline (agents.extremum_seeking): it converges on the optimum in calm air,
 its gradient estimate has the right sign, and its set-point stays in the safe box."""
 
+from functools import partial
+
 import numpy as np
 import pytest
 
 from agents.extremum_seeking import ExtremumSeeking, ExtremumSeekingGains
-from formation_env.envs.config import Randomisation
+from formation_env.sim.config import Randomisation
 from formation_env.envs.observations import observation_size
 from formation_env.tasks import make_config
 from formation_env.scenarios import get_scenario
 from formation_env.sim.params import setpoint_ranges, setpoint_speed_range
 from formation_env.tasks.wake_surfing.optimum import reference_optimum, saving_in_crosswind
-from train.evaluation.wake_surfing_rollout import fly
+from train.evaluation.task_eval import fly as _fly
+
+fly = partial(_fly, "wake_surfing")
 
 B = 2.9
 SC = get_scenario("wake_surfing")
@@ -100,7 +104,7 @@ def test_keeper_inner_loop_holds_the_set_point_the_pid_inner_loop_is_kept():
     (observation's slot error = the set-point) its lateral and vertical actions are what it commands on the nominal slot
     with zero error, shifted by the set-point; ``inner="pid"`` is the issue-16 design (its own actions differ)."""
     from agents.station_keeper import StationKeeper
-    from formation_env.envs.actions import SETPOINT_POSITION_SCALE_M
+    from formation_env.sim.params import SETPOINT_POSITION_SCALE_M
     from formation_env.envs.observations import POSITION_SCALE_M, slog, to_dict
 
     agent, pid = _agent(gain_y=0.0, gain_z=0.0), _agent(gain_y=0.0, gain_z=0.0)

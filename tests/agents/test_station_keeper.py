@@ -243,7 +243,7 @@ def test_hold_offset_m_displaces_the_slot_the_keeper_holds():
     """With no displacement it is the keeper's own set-point offsets (m); displaced by d it is the keeper's action on
     the error taken to the displaced slot, shifted back by d (so a follower already there is held there); a wrong
     shape is refused."""
-    from formation_env.envs.actions import SETPOINT_POSITION_SCALE_M
+    from formation_env.sim.params import SETPOINT_POSITION_SCALE_M
 
     err = np.array([0.0, 0.4, -0.2])
     obs = _obs(err=err)

@@ -8,7 +8,7 @@ import formation_env
 
 @pytest.mark.parametrize("scenario,n", [("echelon", 3), ("vee", 5)])
 def test_pid_holds_echelon_and_vee_with_every_follower_in_upwash(scenario, n):
-    from formation_env.envs.config import Randomisation
+    from formation_env.sim.config import Randomisation
 
     env = formation_env.parallel_env(scenario, action_mode="residual", learning="followers", duration_s=12.0,
                                      randomisation=Randomisation())  # calm air, no start jitter

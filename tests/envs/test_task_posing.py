@@ -59,7 +59,7 @@ def test_frozen_turbulence_episodes_replay_bit_for_bit():
 
 # ------------------------------------------------------------------ actions and the steady state
 def _steady_along_track_error(mode, action, seconds=30.0):
-    from formation_env.envs.config import Randomisation
+    from formation_env.sim.config import Randomisation
 
     env = formation_env.parallel_env("formation_keeping", action_mode=mode, learning="followers", duration_s=seconds + 1.0,
                                      randomisation=Randomisation())  # calm air, no start jitter: the steady state

@@ -77,7 +77,7 @@ def test_parser_handles_escapes_and_removal():
 def test_recorder_on_the_env_matches_the_runner(log):
     import formation_env
 
-    from formation_env.envs.config import Randomisation
+    from formation_env.sim.config import Randomisation
 
     env = formation_env.parallel_env("reconfiguration", randomisation=Randomisation())  # as the runner: calm, no jitter
     env.reset(seed=0)

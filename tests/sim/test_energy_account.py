@@ -11,7 +11,7 @@ import pytest
 
 from formation_env.aircraft import AEROSONDE, trim
 from formation_env.atmosphere.standard import standard_atmosphere
-from formation_env.envs.config import EnvConfig
+from formation_env.sim.config import EnvConfig
 from formation_env.scenarios import get_scenario
 from formation_env.sim import Simulation
 from formation_env.sim.energy import ENERGY_COLUMNS

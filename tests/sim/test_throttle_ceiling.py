@@ -5,7 +5,7 @@ command more and the extrapolated engine map gives more thrust."""
 import numpy as np
 import pytest
 
-from formation_env.envs.config import EnvConfig
+from formation_env.sim.config import EnvConfig
 from formation_env.sim import Simulation
 
 

@@ -9,7 +9,7 @@ import dataclasses
 import numpy as np
 import pytest
 
-from formation_env.envs.config import EnvConfig
+from formation_env.sim.config import EnvConfig
 from formation_env.scenarios import get_scenario
 from formation_env.sim.formation import WAKE_FIDELITIES, WakeConfig, resolve_fidelity, resolve_wake, wake_model_for
 from formation_env.sim.simulation import Simulation

@@ -103,7 +103,7 @@ def test_scenario_and_gym_id(cache):
     np.testing.assert_allclose(slot, cache["optimum"]["offset_b"], atol=0.005 + 1e-9)
     assert "56 %" in sc.description and f"{100 * cache['scenario_slot_saving']:.0f} %" in sc.description
     assert GYM_IDS["formation_env/CloseFormation-v1"] == ("close_formation", 1)
-    from formation_env.envs.config import Randomisation
+    from formation_env.sim.config import Randomisation
 
     # the benchmark draws turbulence and a start jitter: calm air, on the slot, for the map's value
     env = gym.make("formation_env/CloseFormation-v1", duration_s=1.0, action_mode="residual", compute_benefit=True,

@@ -4,7 +4,7 @@ of the cached optima, so a regenerated cache that moves an optimum must move its
 import pytest
 
 from formation_env.tasks.close_formation import optimum as cf
-from formation_env.tasks.close_formations import optimum as cfs
+from formation_env.tasks.n_uav_formations import optimum as cfs
 from formation_env.tasks import get_task
 
 

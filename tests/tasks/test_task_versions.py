@@ -28,7 +28,7 @@ def test_every_id_is_versioned_and_in_the_table():
     for t in TASKS.values():
         if t.gym_id:
             assert t.gym_id.endswith(f"-v{t.version}") and t.gym_id in gym.registry
-            assert t.gym_id in table, f"{t.gym_id}: run python -m formation_env.tasks.versions to record it"
+            assert t.gym_id in table, f"{t.gym_id}: run formation-env data task-versions to record it"
             assert table[t.gym_id]["task"] == t.name and table[t.gym_id]["version"] == t.version
 
 

@@ -14,8 +14,8 @@ from formation_env.scenarios import SlotSchedule, get_scenario
 from formation_env.sim.config import EnvConfig
 from formation_env.sim.params import hold_remaining_decisions
 from formation_env.tasks import get_task
-from formation_env.tasks.close_formations import optimum as opt
-from formation_env.tasks.close_formations.rotation import PHASES_S, rotation_keyframes
+from formation_env.tasks.n_uav_formations import optimum as opt
+from formation_env.tasks.n_uav_formations.rotation import PHASES_S, rotation_keyframes
 
 
 def _positions(t):

@@ -12,7 +12,7 @@ import pytest
 
 import formation_env  # noqa: F401  (registers the ids)
 from formation_env.aircraft import AEROSONDE, trim
-from formation_env.envs.config import Randomisation
+from formation_env.sim.config import Randomisation
 from formation_env.sim import Simulation
 from formation_env.tasks import get_task, make_config
 from formation_env.tasks.wake_surfing import (RANDOM_LEADER_RANDOMISATION, WAKE_SURFING_RANDOMISATION,

@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 import formation_env  # noqa: F401  (registers the ids)
-from formation_env.envs.config import Randomisation
+from formation_env.sim.config import Randomisation
 from formation_env.sim import Simulation
 from formation_env.tasks import make_config
 from formation_env.tasks import get_task, task_options

@@ -6,6 +6,9 @@ import pytest
 TINY = {
     "ppo": {"n_formations": 2, "n_steps": 32, "batch_size": 32, "n_epochs": 1, "eval_freq": 128, "eval_episodes": 2,
             "checkpoint_freq": 128, "policy_kwargs": {"net_arch": [16]}, "env_kwargs": {"duration_s": 3.0}},
+    "recurrent_ppo": {"n_formations": 2, "n_steps": 32, "batch_size": 32, "n_epochs": 1, "eval_freq": 128,
+                      "eval_episodes": 2, "checkpoint_freq": 128,
+                      "policy_kwargs": {"net_arch": [16], "lstm_hidden_size": 8}, "env_kwargs": {"duration_s": 3.0}},
     "sac": {"n_formations": 2, "buffer_size": 2000, "learning_starts": 64, "batch_size": 32, "gradient_steps": 1,
             "eval_freq": 128, "eval_episodes": 2, "checkpoint_freq": 128, "policy_kwargs": {"net_arch": [16]},
             "env_kwargs": {"duration_s": 3.0}},

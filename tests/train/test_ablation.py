@@ -7,6 +7,7 @@ import numpy as np
 import pytest
 
 from formation_env.envs.observations import group_sizes, observation_size, to_dict
+from formation_env.sim.layout import ObservationLayout
 from train.evaluation.ablation import ablated, parse_ablation
 from train.evaluation.policy import EvalPolicy
 
@@ -19,7 +20,7 @@ def test_ablated_copy_zeroes_only_the_named_groups():
         return np.zeros((obs.shape[0], 4))
 
     pol = EvalPolicy("p", "setpoints", act)
-    copy = ablated(pol, "induced_wind,ambient_wind", 2)
+    copy = ablated(pol, "induced_wind,ambient_wind", ObservationLayout.of(2))
     assert copy.name == "p-without-induced_wind+ambient_wind" and copy.action_mode == "setpoints"
     rng = np.random.default_rng(0)
     obs = rng.normal(size=(5, observation_size(2))).astype(np.float32)
@@ -33,6 +34,9 @@ def test_ablated_copy_zeroes_only_the_named_groups():
     assert np.any(obs != 0.0)  # the caller's array is not modified
     with pytest.raises(ValueError, match="observation length"):
         copy.act(obs[:, :-1])
+    # a group the observation lacks (an option the policy was not trained with) is refused, not silently kept
+    with pytest.raises(ValueError, match=r"\['neighbour_wind'\] are not in the observation"):
+        ablated(pol, "neighbour_wind", ObservationLayout.of(2))
 
 
 @pytest.mark.parametrize("spec, match", [("wind", "unknown observation group.*'wind'.*allowed"),

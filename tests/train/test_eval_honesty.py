@@ -31,10 +31,10 @@ def test_a_crash_never_scores_better_than_flying_to_the_end():
 
 
 def test_a_crash_earns_no_saving_for_the_time_it_did_not_fly():
-    from train.evaluation.wake_surfing_rollout import fly
+    from train.evaluation.task_eval import fly
 
     cfg = eval_env_config("wake_surfing", "surfaces", duration_s=20.0)
-    ep = fly(FunctionPolicy(_crash), [7], config=cfg)[0]
+    ep = fly("wake_surfing", FunctionPolicy(_crash), [7], config=cfg)[0]
     assert ep["crashed"] and ep["duration_s"] < 2.0
     assert ep["box_outside_frac"] > 0.9 and ep["saving"] < 0.02 and ep["saving_ratio"] < 0.05
 
@@ -47,12 +47,12 @@ def test_the_safe_box_saving_counts_no_decision_outside_the_box_as_the_task_metr
     import pytest
 
     from train.evaluation.summary import selection_score
-    from train.evaluation.wake_surfing_rollout import fly
+    from train.evaluation.task_eval import fly
 
     cfg = eval_env_config("wake_surfing", "setpoints", turbulence_sigma_mps=1.0, duration_s=30.0)
     seeds = [5, 6, 7]
     eps = run_episodes(ZeroPolicy(), cfg, seeds)
-    task = fly(ZeroPolicy(), seeds, config=cfg)
+    task = fly("wake_surfing", ZeroPolicy(), seeds, config=cfg)
     assert any(e["box_outside_frac"] > 0.05 for e in eps)  # the thesis PID leaves the box at sigma 1
     for e, t in zip(eps, task):
         assert e["induced_drag_saving_in_box"] == pytest.approx(t["saving"], abs=1e-12)

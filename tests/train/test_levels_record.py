@@ -3,7 +3,13 @@ controllers only, never overwritten silently; a directory without levels.json is
 
 import json
 
+from formation_env.cli import main as cli_main
 from train.publish import levels_record as lr
+
+
+def _levels(argv: list[str]) -> int:
+    """``formation-env publish levels ARGV``'s exit status."""
+    return cli_main(["publish", "levels", *argv])
 
 
 def _results(tmp_path):
@@ -39,10 +45,10 @@ def test_record_keeps_summaries_and_the_controllers_episode_columns(tmp_path):
 def test_cli_writes_once_and_refuses_a_bad_directory(tmp_path, capsys):
     src = _results(tmp_path / "r") if (tmp_path / "r").mkdir() is None else None
     out = tmp_path / "rec.json"
-    assert lr.main([str(src), str(out)]) == 0 and json.loads(out.read_text())["scenario"] == "close_formation"
-    assert lr.main([str(src), str(out)]) == 2 and "overwrite" in capsys.readouterr().err
-    assert lr.main([str(src), str(out), "--overwrite"]) == 0
-    assert lr.main([str(tmp_path), str(tmp_path / "x.json")]) == 2
+    assert _levels([str(src), str(out)]) == 0 and json.loads(out.read_text())["scenario"] == "close_formation"
+    assert _levels([str(src), str(out)]) == 2 and "overwrite" in capsys.readouterr().err
+    assert _levels([str(src), str(out), "--overwrite"]) == 0
+    assert _levels([str(tmp_path), str(tmp_path / "x.json")]) == 2
     assert "no levels.json" in capsys.readouterr().err
 
 
@@ -58,21 +64,21 @@ def test_task_records_are_added_never_dropped(tmp_path, capsys):
     --about, an existing one keeps its records (and its about unless --overwrite replaces it)."""
     src = _results(tmp_path / "r") if (tmp_path / "r").mkdir() is None else None
     out = tmp_path / "rec.json"
-    assert lr.main([str(src), str(out), "--task", "vee5"]) == 2 and "--about" in capsys.readouterr().err
+    assert _levels([str(src), str(out), "--task", "vee5"]) == 2 and "--about" in capsys.readouterr().err
     assert not out.exists()
-    assert lr.main([str(src), str(out), "--task", "vee5", "--about", "A", "--command", "c1"]) == 0
-    assert lr.main([str(src / "sigma_1"), str(out), "--task", "vee5", "--command", "c2"]) == 0
-    assert lr.main([str(src), str(out), "--task", "vee9"]) == 0
+    assert _levels([str(src), str(out), "--task", "vee5", "--about", "A", "--command", "c1"]) == 0
+    assert _levels([str(src / "sigma_1"), str(out), "--task", "vee5", "--command", "c2"]) == 0
+    assert _levels([str(src), str(out), "--task", "vee9"]) == 0
     whole = json.loads(out.read_text())
     assert whole["_about"] == "A" and list(whole["records"]) == ["vee5", "vee9"]
     assert [r["command"] for r in whole["records"]["vee5"]] == ["c1", "c2"]
     assert whole["records"]["vee5"][1] == lr.levels_record(src / "sigma_1", command="c2")
-    assert lr.main([str(src), str(out), "--task", "vee9", "--about", "B"]) == 2  # another about: refused
+    assert _levels([str(src), str(out), "--task", "vee9", "--about", "B"]) == 2  # another about: refused
     assert "--overwrite" in capsys.readouterr().err and json.loads(out.read_text()) == whole
-    assert lr.main([str(src), str(out), "--task", "vee9", "--about", "B", "--overwrite"]) == 0
+    assert _levels([str(src), str(out), "--task", "vee9", "--about", "B", "--overwrite"]) == 0
     again = json.loads(out.read_text())
     assert again["_about"] == "B" and len(again["records"]["vee9"]) == 2 and again["records"]["vee5"] == whole["records"]["vee5"]
     single = tmp_path / "single.json"
-    assert lr.main([str(src), str(single)]) == 0
-    assert lr.main([str(src), str(single), "--task", "vee5"]) == 2 and "not a multi-task record" in capsys.readouterr().err
-    assert lr.main([str(src), str(tmp_path / "x.json"), "--about", "A"]) == 2  # --about without --task
+    assert _levels([str(src), str(single)]) == 0
+    assert _levels([str(src), str(single), "--task", "vee5"]) == 2 and "not a multi-task record" in capsys.readouterr().err
+    assert _levels([str(src), str(tmp_path / "x.json"), "--about", "A"]) == 2  # --about without --task

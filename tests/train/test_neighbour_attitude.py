@@ -13,7 +13,7 @@ def test_the_classical_agents_read_the_attitudes_when_told():
     from agents.pid_formation import PIDFormation
     from agents.separation_guard import GuardGains, SeparationGuard
     from agents.station_keeper import StationKeeper
-    from formation_env.envs.config import Randomisation
+    from formation_env.sim.config import Randomisation
 
     layouts = [(False, False), (False, True), (True, True)]
     envs = [formation_env.parallel_env("echelon3", action_mode="setpoints", neighbour_wind=w, neighbour_attitude=t,
@@ -21,9 +21,10 @@ def test_the_classical_agents_read_the_attitudes_when_told():
             for w, t in layouts]
     for env in envs:
         env.reset(seed=7)
-    guards = [SeparationGuard(GuardGains(guard_m=30.0), neighbour_wind=w, neighbour_attitude=t) for w, t in layouts]
-    keepers = [StationKeeper(neighbour_wind=w, neighbour_attitude=t) for w, t in layouts]
-    pids = [PIDFormation(neighbour_wind=w, neighbour_attitude=t) for w, t in layouts]
+    told = [env.observation_layout for env in envs]  # the env's layout: what the agents are told
+    guards = [SeparationGuard(GuardGains(guard_m=30.0), layout=layout) for layout in told]
+    keepers = [StationKeeper(layout=layout) for layout in told]
+    pids = [PIDFormation(layout=layout) for layout in told]
     for agent in keepers + pids:
         agent.reset(3)
     rng = np.random.default_rng(3)
@@ -43,5 +44,5 @@ def test_the_classical_agents_read_the_attitudes_when_told():
             np.testing.assert_array_equal(pids[i].act(obs[i]), p0)
     assert shifted > 0
     with pytest.raises(ValueError, match=r"test.act: observation length 65 is not that of an observation with "
-                                         r"neighbours' winds and attitudes \(47 \+ 12 k, k >= 1\)"):
-        observation_groups(obs[1], "test", neighbour_wind=True, neighbour_attitude=True)
+                                         r"neighbour_wind and neighbour_attitude \(47 \+ 12 k, k >= 1\)"):
+        observation_groups(obs[1], "test", told[2])

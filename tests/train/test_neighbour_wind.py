@@ -1,7 +1,8 @@
-"""The neighbours' winds (EnvConfig.neighbour_wind), and alike their attitudes (EnvConfig.neighbour_attitude), as
-observation options through training, publication and evaluation: a run trained with one records it, its published
-sidecar carries it, load_policy and evaluate fly the policy with it (the observation it was trained on), ablation
-knows the group, and a bad value is refused."""
+"""The neighbours' winds (EnvConfig.neighbour_wind), and alike every optional observation group (its switch in
+formation_env.sim.layout.OPTIONS: the neighbours' attitudes, ...), as observation options through training,
+publication and evaluation: a run trained with one records its layout, its published sidecar carries it, load_policy
+and evaluate fly the policy with it (the observation it was trained on), ablation knows the group, and a bad value is
+refused."""
 
 import json
 
@@ -9,15 +10,13 @@ import numpy as np
 import pytest
 
 from formation_env.envs.observations import observation_size
+from formation_env.sim.layout import OPTIONS, ObservationLayout
 from train.evaluation.ablation import ablated
 from train.evaluation.evaluate import evaluate
 from train.evaluation.policy_loader import load_policy
 from train.publish import publish as publish_mod
 from train.sb3.config import TrainConfig
 from train.sb3.train import train
-
-
-OPTIONS = ("neighbour_wind", "neighbour_attitude")  # the optional per-neighbour groups, threaded alike
 
 
 @pytest.mark.parametrize("key", OPTIONS)
@@ -35,34 +34,36 @@ def test_a_run_with_a_neighbour_group_is_flown_with_it(tmp_path, tiny, monkeypat
     out = tmp_path / "r"
     train(scenario="echelon3", algo="ppo", action_mode="setpoints", seed=0, steps=128, out_dir=out, overrides=over,
           progress_bar=False, log=lambda m: None)
-    other = next(o for o in OPTIONS if o != key)
     meta = json.loads((out / "best_model.json").read_text())
-    assert meta[key] is True and meta["action_guard"] is True and other not in meta
+    trained, plain = ObservationLayout.of(3, 2, **{key: True}), ObservationLayout.of(3, 2)  # echelon3: each sees 2
+    (group,) = trained.optional
+    assert meta["observation"] == trained.to_dict() and meta["action_guard"] is True
+    assert dict(meta["observation"]["groups"]).keys() == plain.groups.keys() | {group}
     pub = tmp_path / "pub"
     pub.mkdir()
     monkeypatch.setattr(publish_mod, "POLICIES", pub)
     publish_mod.publish(out, "p")
     side = json.loads((pub / "p.json").read_text())
-    assert side["env"][key] is True
+    assert side["env"]["observation"] == trained.to_dict()
     pol = load_policy(str(pub / "p.zip"))
-    assert getattr(pol, key) and not getattr(pol, other)
-    # evaluate flies it with the observation it was trained on (3 UAVs, 2 neighbours, 3 values each: 6 more values;
-    # with the plain one the network would be fed 59 values for its 65 and fail)
+    assert pol.observation == trained and pol.observation.options == {key: True}
+    # evaluate flies it with the observation it was trained on (with the plain one the network would be fed 59
+    # values for its longer input and fail)
     res = evaluate([str(pub / "p.zip")], scenario="echelon3", episodes=1, duration_s=2.0, plots=False, n_boot=10,
-                   ablations=[key])
-    assert set(res["policies"]) == {"p", f"p-without-{key}"}
+                   ablations=[group])
+    assert set(res["policies"]) == {"p", f"p-without-{group}"}
     # the ablated copy masks exactly the new group of the longer observation and refuses the shorter one
-    hid = ablated(pol, [key], 3, 2, **{key: True})
+    hid = ablated(pol, [group], trained)
     obs = np.ones((2, observation_size(3, 2, **{key: True})), np.float32)
-    assert hid.act(obs).shape == (2, 4)
-    with pytest.raises(ValueError, match="observation length 59, expected 65"):
+    assert hid.act(obs).shape == (2, 4) and trained.size > plain.size == 59
+    with pytest.raises(ValueError, match=f"observation length 59, expected {trained.size}"):
         hid.act(np.ones((2, observation_size(3, 2)), np.float32))
 
 
 def _paired_observations(n_steps=12):
     """The same echelon3 flight observed without and with the neighbours' winds (sigma 1, followers pushed about)."""
     import formation_env
-    from formation_env.envs.config import Randomisation
+    from formation_env.sim.config import Randomisation
 
     envs = [formation_env.parallel_env("echelon3", action_mode="setpoints", neighbour_wind=w,
                                        randomisation=Randomisation(turbulence_sigma_mps=1.0, initial_offset_m=4.0))
@@ -88,10 +89,10 @@ def test_the_classical_agents_read_the_longer_observation_when_told():
     from agents.station_keeper import StationKeeper
 
     pairs = _paired_observations()
-    plain, winds = SeparationGuard(GuardGains(guard_m=30.0)), SeparationGuard(GuardGains(guard_m=30.0),
-                                                                              neighbour_wind=True)
-    keepers = StationKeeper(), StationKeeper(neighbour_wind=True)
-    pids = PIDFormation(), PIDFormation(neighbour_wind=True)
+    told = ObservationLayout(optional=("neighbour_wind",))  # any formation: the length gives the neighbours
+    plain, winds = SeparationGuard(GuardGains(guard_m=30.0)), SeparationGuard(GuardGains(guard_m=30.0), layout=told)
+    keepers = StationKeeper(), StationKeeper(layout=told)
+    pids = PIDFormation(), PIDFormation(layout=told)
     for agent in keepers + pids:
         agent.reset(3)  # the env flies every UAV: three rows
     rng = np.random.default_rng(0)
@@ -108,5 +109,5 @@ def test_the_classical_agents_read_the_longer_observation_when_told():
     _, wrong = observation_groups(pairs[0][1], "test")
     assert wrong["neighbours"].shape[1] == 18  # untold: three neighbours, the third made of the winds
     with pytest.raises(ValueError, match=r"test.act: observation length 59 is not that of an observation with "
-                                         r"neighbours' winds \(47 \+ 9 k, k >= 1\)"):
-        observation_groups(pairs[0][0], "test", neighbour_wind=True)
+                                         r"neighbour_wind \(47 \+ 9 k, k >= 1\)"):
+        observation_groups(pairs[0][0], "test", told)

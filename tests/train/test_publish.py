@@ -4,6 +4,7 @@ import json
 
 import pytest
 
+from formation_env.cli import main as cli_main
 from train.publish import publish
 
 
@@ -66,7 +67,7 @@ def test_report_committed_out_writes_only_under_out(tmp_path, monkeypatch, capsy
     monkeypatch.setattr(rc, "evaluate", _fake_evaluate(calls))
     before = _tracked_state()
     out = tmp_path / "eval"
-    assert rc.main(["--out", str(out), "--episodes", "2", "--tasks", "formation_keeping"]) == 0
+    assert cli_main(["publish", "committed", "--out", str(out), "--episodes", "2", "--tasks", "formation_keeping"]) == 0
     # the test set, then the validation baselines (of every task: the curves figure shows them all)
     assert calls == ["formation_keeping", "formation_keeping", "close_formation", "reconfiguration"]
     assert _tracked_state() == before  # nothing tracked is touched
@@ -79,7 +80,7 @@ def test_report_committed_out_writes_only_under_out(tmp_path, monkeypatch, capsy
     # Again into the same directory: refused up front, before any evaluation, in one line.
     calls.clear()
     capsys.readouterr()
-    assert rc.main(["--out", str(out), "--tasks", "formation_keeping"]) == 2
+    assert cli_main(["publish", "committed", "--out", str(out), "--tasks", "formation_keeping"]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert calls == [] and len(err) == 1 and "not empty" in err[0]
 
@@ -98,13 +99,13 @@ def test_report_committed_checks_every_output_before_evaluating(tmp_path, monkey
     fig.write_text("a file where the figures directory should be\n")
     monkeypatch.setattr(publish, "POLICIES", pol)
     monkeypatch.setattr(rc, "FIGURES", fig)
-    argv = ["--out", str(tmp_path / "eval"), "--overwrite", "--tasks", "formation_keeping"]
-    assert rc.main(argv) == 2 and calls == []  # a tracked output that cannot be written: nothing flies
+    argv = ["publish", "committed", "--out", str(tmp_path / "eval"), "--overwrite", "--tasks", "formation_keeping"]
+    assert cli_main(argv) == 2 and calls == []  # a tracked output that cannot be written: nothing flies
     assert "figures" in capsys.readouterr().err
     fig.unlink()
     fig.mkdir()
     old = (pol / "formation_keeping_ppo_setpoints_evaluation.json").read_text()
-    assert rc.main(argv) == 0 and len(calls) == 4  # --overwrite: the tracked records are replaced
+    assert cli_main(argv) == 0 and len(calls) == 4  # --overwrite: the tracked records are replaced
     assert (pol / "formation_keeping_ppo_setpoints_evaluation.json").read_text() != old
     assert (fig / "eval_formation_keeping_slot_error.png").read_bytes() == b"\x89PNG fake"
     assert not (tmp_path / "eval" / "policies").exists()
@@ -137,6 +138,12 @@ def test_publish_best_or_final_model(tmp_path, monkeypatch):
     assert meta["num_timesteps"] == 200 and meta["validation"]["num_timesteps"] == 200 and meta["note"]
     with pytest.raises(ValueError, match="model"):
         publish.publish(run, "c_seed3", model="last")
+    # the command line: `formation-env publish run RUN_DIR NAME`; an existing NAME is refused in one line
+    assert cli_main(["publish", "run", str(run), "d_seed3", "--model", "final", "--wall-s", "12.5",
+                     "--stopped-at", "200"]) == 0
+    meta = json.loads((out / "d_seed3.json").read_text())
+    assert (out / "d_seed3.zip").read_bytes() == b"final" and meta["wall_s"] == 12.5 and meta["run_steps"] == 200
+    assert cli_main(["publish", "run", str(run), "d_seed3"]) == 2
 
 
 def test_publish_names_the_guard_the_policy_flies_with(tmp_path, monkeypatch):

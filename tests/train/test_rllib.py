@@ -211,7 +211,7 @@ def test_rllib_env_wrapper_keeps_agent_order_and_scales_rewards():
     cfg = {"scenario": "echelon", "action_mode": "surfaces", "learning": "all", "env_kwargs": {}, "reward_scale": 0.5}
     env = FormationMultiAgentEnv(cfg)
     assert env.possible_agents == ["uav_0", "uav_1", "uav_2"]
-    from formation_env.envs.config import Randomisation
+    from formation_env.sim.config import Randomisation
 
     # env_kwargs {}: the generic posing, not the task's (a run's env_kwargs arrive merged over the task's)
     ref = formation_env.parallel_env("echelon", learning="all", action_mode="surfaces", obs_mode="flat",
@@ -308,7 +308,7 @@ def test_missing_ray_gives_the_install_command(capsys, monkeypatch, tmp_path):
 
 def test_nothing_outside_the_backend_imports_ray():
     code = ("import sys, formation_env, formation_env.envs, formation_env.cli, formation_env.runs.runner, "
-            "agents.run, train.sb3.train, train.evaluation.evaluate, train.rllib.backend\n"
+            "agents.station_keeper, train.sb3.train, train.evaluation.evaluate, train.rllib.backend\n"
             "formation_env.cli.build_parser()\n"
             "env = formation_env.parallel_env('formation_keeping'); env.reset(seed=0)\n"
             "print('ray' in sys.modules)")

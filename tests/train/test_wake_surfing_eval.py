@@ -1,20 +1,35 @@
-"""The wake-surfing evaluation (train.evaluation.wake_surfing_eval, train.evaluation.wake_surfing_rollout): the task preset
-is what training uses, the statistics helpers have the right signs, and every controller flies."""
+"""The wake-surfing evaluation (the task's hooks, formation_env.tasks.wake_surfing.evaluation and .controllers, under
+the generic driver train.evaluation.task_eval and ``formation-env evaluate --task-report``): the task preset is what
+training uses, the statistics helpers have the right signs, and every controller flies."""
 
 import dataclasses
 import math
+from functools import partial
 from pathlib import Path
 
 import numpy as np
 import pytest
 
-from formation_env.envs.config import Randomisation, RewardWeights
+from formation_env.sim.config import Randomisation, RewardWeights
 from formation_env.tasks.wake_surfing import WAKE_SURFING_RANDOMISATION, WAKE_SURFING_REWARD
 from train.sb3.config import load_hyperparams
 from train.evaluation.episodes import longest_run, eval_env_config
-from train.evaluation.wake_surfing_eval import paired_gain, summarise_surfer
-from train.evaluation.wake_surfing_rollout import (es_surfer, fly, oracle_keeper, oracle_surfer, pid_formation_surfer,
-                                                  pid_surfer, sb3_surfer)
+from formation_env.tasks.wake_surfing import controllers as _controllers
+from formation_env.tasks.wake_surfing.evaluation import paired_gain as _paired_gain
+from formation_env.tasks.wake_surfing.evaluation import summarise_surfer as _summarise_surfer
+from train.evaluation import stats
+from train.evaluation.task_eval import agent_kit, policy_from_zip as sb3_surfer
+from train.evaluation.task_eval import fly as _fly
+
+KIT = agent_kit()
+pid_surfer = _controllers.pid_surfer
+pid_formation_surfer = partial(_controllers.pid_formation_surfer, KIT)
+es_surfer = partial(_controllers.es_surfer, KIT)
+oracle_surfer = partial(_controllers.oracle_surfer, KIT)
+oracle_keeper = partial(_controllers.oracle_keeper, KIT)
+fly = partial(_fly, "wake_surfing")
+paired_gain = partial(_paired_gain, stats=stats)
+summarise_surfer = partial(_summarise_surfer, stats=stats)
 
 POLICY = Path(__file__).resolve().parents[2] / "train" / "policies" / "wake_surfing_ppo_setpoints_seed2.zip"
 
@@ -89,14 +104,22 @@ def test_every_controller_flies_and_the_policy_beats_the_pid():
 
 
 def test_command_line_errors_exit_2_with_one_line(tmp_path, capsys):
-    from train.evaluation.wake_surfing_eval import main
+    from formation_env.cli import main
 
     bad = tmp_path / "bad.zip"
     bad.write_text("not a zip")
-    for argv, needle in (([str(tmp_path / "none.zip")], "does not exist"), (["--episodes", "0"], "--episodes"),
-                         (["--turbulence", "nan"], "--turbulence"), (["--oracle-keeper-margins", "0.9"], "margin"),
-                         ([str(bad), "--episodes", "1"], "zip")):
-        assert main(argv) == 2
+    own = ["evaluate", "--scenario", "wake_surfing", "--task-report", "--out", str(tmp_path / "out")]
+    for argv, needle in (([*own, "--policy", str(tmp_path / "none.zip")], "does not exist"),
+                         ([*own, "--episodes", "0"], "--episodes"), ([*own, "--turbulence", "nan"], "--turbulence"),
+                         ([*own, "--ceiling", "oracle_keeper:0.9"], "margin"),
+                         ([*own, "--policy", str(bad), "--episodes", "1", "--ceiling", "none"], "zip"),
+                         (["evaluate", "--scenario", "close_formation", "--task-report", "--policy", str(bad)],
+                          "own evaluation")):
+        try:
+            code = main(argv)
+        except SystemExit as exc:  # argparse's own errors
+            code = exc.code
+        assert code == 2
         err = capsys.readouterr().err.strip()
         assert len(err.splitlines()) == 1 and needle in err and "Traceback" not in err
 
@@ -105,7 +128,7 @@ def test_the_randomised_leader_variant_flies_with_its_own_reference():
     """The variant's episodes draw the leader's weight and speed, and each is judged against the optimum scaled by
     the leader's factor (formation_env.tasks.wake_surfing.optimum.leader_factor); a task without a wake-surfing box
     is refused."""
-    from train.evaluation.wake_surfing_eval import evaluate_wake_surfing
+    from train.evaluation.task_eval import evaluate_task
 
     cfg = dataclasses.replace(eval_env_config("wake_surfing_random_leader", "setpoints"), duration_s=10.0)
     assert cfg.randomisation.random_leader and cfg.compute_benefit
@@ -119,7 +142,7 @@ def test_the_randomised_leader_variant_flies_with_its_own_reference():
                                                                 duration_s=10.0))[0]
     assert base["reference_factor"] == 1.0 and base["leader_mass_kg"] == pytest.approx(10.5)
     with pytest.raises(ValueError, match="scenario must be one of"):
-        evaluate_wake_surfing([], scenario="close_formation", episodes=1)
+        evaluate_task([], scenario="close_formation", episodes=1)
 
 
 def test_the_committed_variant_record_is_what_its_policy_flies():

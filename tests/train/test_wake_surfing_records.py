@@ -1,4 +1,4 @@
-"""train.publish.wake_surfing_records: a group's levels from saved per-controller episodes (the baselines flown once
+"""train.publish.records (for wake_surfing, the task with records of its own evaluation): a group's levels from saved per-controller episodes (the baselines flown once
 for every group), the per-episode columns and the summaries agreeing, the task group's level kept in full, and bad
 input refused with one line."""
 
@@ -7,7 +7,11 @@ import json
 import numpy as np
 import pytest
 
-from train.publish.wake_surfing_records import EPISODE_COLUMNS, group_levels, main
+from formation_env.cli import main
+from formation_env.tasks import get_task
+from train.publish.records import group_levels
+
+EPISODE_COLUMNS = get_task("wake_surfing").evaluator.records.episode_columns
 
 CONTROLLERS = ("pid", "pid_formation", "extremum_seeking", "oracle_keeper_margin0", "oracle_keeper_margin0.05")
 
@@ -34,7 +38,7 @@ def test_group_levels_from_saved_episodes(tmp_path, group):
               "oracle_keeper_margin0.05": 0.75, f"{group}_seed0": 0.93, f"{group}_seed1": 0.95}
     for name, level in levels.items():
         (d / f"{name}.json").write_text(json.dumps(_episodes(rng, level)))
-    out, full = group_levels(tmp_path, group, settings=(("wake_surfing", 0.25),))
+    out, full = group_levels("wake_surfing", tmp_path, group, settings=(("wake_surfing", 0.25),))
     lv = out["wake_surfing_sigma_0.25"]
     assert lv["wake_fidelity"] == "converged" and lv["seeds"] == [20000000000, 20000000011]
     assert set(lv["summaries"]) == set(levels)
@@ -49,11 +53,13 @@ def test_group_levels_from_saved_episodes(tmp_path, group):
         assert set(cols) == set(EPISODE_COLUMNS)
         assert lv["summaries"][f"{group}_seed1"]["saving_ratio"] == pytest.approx(np.mean(cols["saving_ratio"]), abs=1e-5)
     with pytest.raises(ValueError, match="no episodes of policy group"):
-        group_levels(tmp_path, "absent_group", settings=(("wake_surfing", 0.25),))
+        group_levels("wake_surfing", tmp_path, "absent_group", settings=(("wake_surfing", 0.25),))
 
 
 def test_bad_input_is_one_line_and_exit_2(tmp_path, capsys):
-    assert main([str(tmp_path), str(tmp_path / "none_seed0.zip")]) == 2
-    assert main([str(tmp_path), str(tmp_path / "none_seed0.zip"), "--episodes", "0"]) == 2
+    assert main(["publish", "records", "wake_surfing", str(tmp_path), str(tmp_path / "none_seed0.zip")]) == 2
+    with pytest.raises(SystemExit) as exc:  # argparse's own exit, after its one line
+        main(["publish", "records", "wake_surfing", str(tmp_path), str(tmp_path / "none_seed0.zip"), "--episodes", "0"])
+    assert exc.value.code == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 2 and "does not exist" in err[0] and "--episodes" in err[1] and "Traceback" not in "".join(err)

@@ -12,7 +12,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from formation_env.envs.observations import GROUPS, group_sizes
+from formation_env.envs.observations import GROUPS, ObservationLayout
 
 from .policy import EvalPolicy
 
@@ -37,31 +37,27 @@ def ablation_name(policy_name: str, groups: Sequence[str]) -> str:
     return f"{policy_name}-without-{'+'.join(groups)}"
 
 
-def ablated(policy: EvalPolicy, groups: Sequence[str], n_vehicles: int, neighbour_count: int | None = None,
-            neighbour_wind: bool = False, neighbour_attitude: bool = False) -> EvalPolicy:
-    """A copy of ``policy`` whose observation has ``groups`` zeroed (formation of ``n_vehicles`` UAVs observing
-    ``neighbour_count`` neighbours, and their winds with ``neighbour_wind`` and attitudes with ``neighbour_attitude``,
-    as the env's options)."""
+def ablated(policy: EvalPolicy, groups: Sequence[str], layout: ObservationLayout) -> EvalPolicy:
+    """A copy of ``policy`` whose observation has ``groups`` zeroed (``layout``: the observations' groups, the env's
+    :attr:`~formation_env.sim.simulation.Simulation.observation_layout`)."""
     groups = parse_ablation(groups)
-    sizes = group_sizes(n_vehicles, neighbour_count, neighbour_wind, neighbour_attitude)
-    mask, k = [], 0
-    for name, size in sizes.items():
-        if name in groups:
-            if size == 0:
-                raise ValueError(f"ablation: group {name!r} is empty in a formation of {n_vehicles} UAVs")
-            mask.extend(range(k, k + size))
-        k += size
-    cols = np.asarray(mask, dtype=np.int64)
-    act = policy.act
+    sizes = layout.groups
+    absent = [name for name in groups if name not in sizes]
+    if absent:
+        raise ValueError(f"ablation: group(s) {absent} are not in the observation (its groups: {list(sizes)})")
+    empty = [name for name in groups if sizes[name] == 0]
+    if empty:
+        raise ValueError(f"ablation: group {empty[0]!r} is empty in a formation of {layout.neighbours + 1} UAVs")
+    cols = np.concatenate([np.arange(layout.size)[layout.slice(name)] for name in groups]).astype(np.int64)
+    size, act = layout.size, policy.act
 
     def masked(obs: np.ndarray) -> np.ndarray:
         o = np.array(obs, copy=True)
-        if o.shape[-1] != k:
-            raise ValueError(f"ablated policy {policy.name!r}: observation length {o.shape[-1]}, expected {k} "
-                             f"for {n_vehicles} UAVs")
+        if o.shape[-1] != size:
+            raise ValueError(f"ablated policy {policy.name!r}: observation length {o.shape[-1]}, expected {size} "
+                             f"for {layout.neighbours} observed neighbours")
         o[..., cols] = 0.0
         return act(o)
 
     return EvalPolicy(name=ablation_name(policy.name, groups), action_mode=policy.action_mode, act=masked,
-                      control_hz=policy.control_hz, path=policy.path, reset=policy.reset,
-                      neighbour_wind=policy.neighbour_wind, neighbour_attitude=policy.neighbour_attitude)
+                      control_hz=policy.control_hz, path=policy.path, reset=policy.reset, observation=policy.observation)

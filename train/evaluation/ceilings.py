@@ -1,7 +1,7 @@
 """What limits close-formation station keeping (issue 24): the station keeper flown with what a real controller
 does not have, on the same episodes as the plain keeper.
 
-* **Thrust** (``--throttle-max`` of ``formation-env evaluate``; :class:`formation_env.envs.config.EnvConfig`): the
+* **Thrust** (``--throttle-max`` of ``formation-env evaluate``; :class:`formation_env.sim.config.EnvConfig`): the
   flight control's throttle ceiling raised for every UAV, a counterfactual engine. Any policy flies it.
 * **Decision rate**: the keeper deciding at 25 or 50 Hz instead of 10 (its gains are per second).
 * **Told the disturbance, its own gust** (:func:`wind_preview_keeper`): the keeper's ambient-wind feed-forwards
@@ -14,19 +14,19 @@ does not have, on the same episodes as the plain keeper.
   the track at where the slot will be ``tau`` s later: its lateral and vertical slot errors and their rates less the
   slot's departure from straight flight over ``tau`` (slot frame).
 
-``python -m train.evaluation.ceilings [--episodes N] [--seed S] [--sigma X]`` prints the table
+``formation-env publish ceilings [--episodes N] [--seed S] [--sigma X]`` prints the table
 (docs/close_formation.md, "Ceilings", has the measured one). A preview of 0 s is the plain keeper bit for bit
 (``tests/train/test_ceilings.py``)."""
 
 from __future__ import annotations
 
-import argparse
 import math
 from typing import NamedTuple
 
 import numpy as np
 
-__all__ = ["FirstPass", "first_pass", "wind_preview_keeper", "slot_preview_keeper", "ceiling_rows", "main"]
+__all__ = ["FirstPass", "first_pass", "wind_preview_keeper", "slot_preview_keeper", "ceiling_rows",
+           "ceilings_report"]
 
 
 def _keeper_policy(name: str, act, reset, control_hz: float = 10.0):
@@ -212,25 +212,18 @@ def _table(rows: list[dict]) -> str:
                           f"{r['rms_along_track_m']:.2f} | {r['surges']} | {r['collisions']} | {r['note']} |\n" for r in rows)
 
 
-def main(argv=None) -> int:
+def ceilings_report(episodes: int = 100, seed: int | None = None, sigma: float = 1.0) -> str:
+    """``formation-env publish ceilings``: the ceilings table (markdown) on ``episodes`` (1..1000) consecutive seeds
+    from ``seed`` (default the test seeds' base) at turbulence ``sigma`` (0..3 m/s). A bad value is a ValueError
+    naming it and its range."""
     from train.config import TEST_SEED_BASE
 
-    p = argparse.ArgumentParser(prog="python -m train.evaluation.ceilings", description=__doc__.split("\n\n")[0])
-    p.add_argument("--episodes", type=int, default=100, help="episodes, 1..1000 (default 100)")
-    p.add_argument("--seed", type=int, default=TEST_SEED_BASE, help="the first of --episodes consecutive seeds")
-    p.add_argument("--sigma", type=float, default=1.0, help="turbulence sigma, m/s, 0..3 (default 1)")
-    args = p.parse_args(argv)
-    if not 1 <= args.episodes <= 1000:
-        p.error(f"--episodes must be in 1..1000, got {args.episodes}")
-    if not (math.isfinite(args.sigma) and 0.0 <= args.sigma <= 3.0):
-        p.error(f"--sigma must be in [0, 3] m/s, got {args.sigma}")
-    if args.seed < 0:
-        p.error(f"--seed must be >= 0, got {args.seed}")
-    rows = ceiling_rows(list(range(args.seed, args.seed + args.episodes)), sigma=args.sigma)
-    print(f"close_formation, {args.episodes} episodes from seed {args.seed}, sigma {args.sigma:g} m/s\n")
-    print(_table(rows))
-    return 0
-
-
-if __name__ == "__main__":
-    raise SystemExit(main())
+    seed = TEST_SEED_BASE if seed is None else seed
+    if not 1 <= episodes <= 1000:
+        raise ValueError(f"--episodes must be an integer in [1, 1000], got {episodes}")
+    if not (math.isfinite(sigma) and 0.0 <= sigma <= 3.0):
+        raise ValueError(f"--sigma must be a number of m/s in [0, 3], got {sigma}")
+    if seed < 0:
+        raise ValueError(f"--seed must be an integer >= 0, got {seed}")
+    rows = ceiling_rows(list(range(seed, seed + episodes)), sigma=sigma)
+    return f"close_formation, {episodes} episodes from seed {seed}, sigma {sigma:g} m/s\n\n" + _table(rows)

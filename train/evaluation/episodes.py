@@ -10,7 +10,7 @@ import numpy as np
 
 from formation_env.rollout import Recorder
 from formation_env.sim.energy import ENERGY_COLUMNS
-from formation_env.tasks.wake_surfing.metrics import longest_run
+from formation_env.tasks.evaluation import longest_run
 
 from .summary import PER_UAV_PREFIX
 
@@ -29,8 +29,7 @@ DEFAULT_TURBULENCE_SIGMA_MPS = 1.0  # the test set's Dryden level (scenarios wit
 def eval_env_config(scenario: str, action_mode: str, *, turbulence_sigma_mps: float | None = None, wake: bool = True,
                     control_hz: float = 10.0, compute_benefit: bool = False, duration_s: float | None = None,
                     turbulence_field: str | None = None, wake_fidelity: str | None = None, throttle_max: float = 1.0,
-                    leader_reference: str | None = None, neighbour_wind: bool = False,
-                    neighbour_attitude: bool = False):
+                    leader_reference: str | None = None, observation=None):
     """The evaluation episodes' EnvConfig: the thesis scenario with wake and turbulence on (``turbulence_field``
     None: the env's default field, one frozen von Karman field per formation). With
     its defaults (sigma 1 m/s, wake on, the scenario's duration, no other randomisation than the task's
@@ -41,15 +40,16 @@ def eval_env_config(scenario: str, action_mode: str, *, turbulence_sigma_mps: fl
     level). ``wake_fidelity`` None: the
     scenario's (formation_env.sim.formation.WAKE_FIDELITIES; a record flown before a task changed fidelity is re-flown
     with the fidelity it records). ``throttle_max``: the flight control's throttle ceiling (1: the Aerosonde's; above 1
-    the counterfactual engine of the ceiling measurements, :class:`formation_env.envs.config.EnvConfig`).
+    the counterfactual engine of the ceiling measurements, :class:`formation_env.sim.config.EnvConfig`).
     ``leader_reference``: "ground" or "air" (how vehicle 0's reference moves, EnvConfig.leader_reference); None the
-    scenario's. ``neighbour_wind``, ``neighbour_attitude``: the observation options a policy was trained with
-    (EnvConfig's)."""
-    from formation_env.envs.config import EnvConfig, Randomisation
+    scenario's. ``observation``: the :class:`~formation_env.sim.layout.ObservationLayout` a policy was trained on (its
+    optional groups switched on; None: none)."""
+    from formation_env.sim.config import EnvConfig, Randomisation
     from formation_env.tasks import task_for_scenario, task_learning
 
     if turbulence_field is None:
         turbulence_field = EnvConfig.turbulence_field  # the dataclass default
+    switches = {} if observation is None else observation.options  # the optional groups it observes
     t = task_for_scenario(scenario)
     preset = None if t is None or t.evaluation.preset is None else dict(t.evaluation.preset)
     if preset:  # the task's own test distribution (wake_surfing): its randomisation, reward and benefit, at this level
@@ -60,7 +60,7 @@ def eval_env_config(scenario: str, action_mode: str, *, turbulence_sigma_mps: fl
         return EnvConfig(scenario=scenario, learning=task_learning(scenario), action_mode=action_mode, wake=wake,
                          control_hz=control_hz, duration_s=duration_s, turbulence_field=turbulence_field,
                          wake_fidelity=wake_fidelity, throttle_max=throttle_max, leader_reference=leader_reference,
-                         neighbour_wind=neighbour_wind, neighbour_attitude=neighbour_attitude, randomisation=rnd, **preset)
+                         randomisation=rnd, **switches, **preset)
     if turbulence_sigma_mps is None:
         turbulence_sigma_mps = DEFAULT_TURBULENCE_SIGMA_MPS
     extra = dict(t.test_randomisation) if t is not None else {}
@@ -69,8 +69,7 @@ def eval_env_config(scenario: str, action_mode: str, *, turbulence_sigma_mps: fl
     return EnvConfig(scenario=scenario, learning=task_learning(scenario), action_mode=action_mode, wake=wake, control_hz=control_hz,
                      compute_benefit=compute_benefit, duration_s=duration_s, turbulence_field=turbulence_field,
                      wake_fidelity=wake_fidelity, throttle_max=throttle_max, leader_reference=leader_reference,
-                     neighbour_wind=neighbour_wind, neighbour_attitude=neighbour_attitude,
-                     randomisation=Randomisation(turbulence_sigma_mps=turbulence_sigma_mps, **extra))
+                     **switches, randomisation=Randomisation(turbulence_sigma_mps=turbulence_sigma_mps, **extra))
 
 
 def reference_saving(scenario_name: str) -> float | None:
@@ -171,14 +170,17 @@ def run_episodes(policy, config, seeds: Sequence[int], *, keep_series: bool = Fa
     protocol) and return the per-episode metrics (the module's table); ``recorders``: more
     :class:`formation_env.rollout.Recorder` s to see the same rollout."""
     from formation_env.rollout import rollout
-    from formation_env.sim import Simulation
+    from formation_env.tasks.compose import task_simulation, task_terms
 
     seeds = [int(s) for s in seeds]
     if not seeds:
         raise ValueError("seeds must not be empty")
-    sim = Simulation(config, batch_size=len(seeds))
+    sim = task_simulation(config, batch_size=len(seeds))  # a task's Python terms composed after the step
     rec = _EpisodeSeries(config)
-    res = rollout(sim, policy, seeds, recorders=[rec, *recorders])
+    terms = task_terms(config.scenario)
+    term_metrics = terms.episode_metrics() if terms is not None else None  # a task's Python metric terms
+    term_rec = [term_metrics.recorder()] if term_metrics is not None else []
+    res = rollout(sim, policy, seeds, recorders=[rec, *term_rec, *recorders])
     sc, agents = sim.scenario, rec.agents
     b, a_n = rec.shape
     has_box = sc.safe_box_b is not None
@@ -275,6 +277,9 @@ def run_episodes(policy, config, seeds: Sequence[int], *, keep_series: bool = Fa
                 settle = t[outside[-1] + 1] if len(outside) else t[0]
                 m["reconfig_time_s"] = float(settle - schedule_start)
         out.append(m)
+    if term_rec:  # the task's own columns beside the generic ones
+        for m, extra in zip(out, term_metrics.episodes(term_rec[0], res)):
+            m.update({k: v for k, v in extra.items() if k != "seed"})
     if keep_series:
         for i, m in enumerate(out):
             if sim.benefit_enabled:

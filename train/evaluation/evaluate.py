@@ -114,7 +114,7 @@ def evaluate(policies: Sequence[str], *, scenario: str, episodes: int = TEST_EPI
     (:func:`comparisons`: every policy against each baseline evaluated with it), ``groups`` (seed groups:
     policies ``<name>_seed<k>`` and the ``groups`` argument {group: [policy names]}, see
     :func:`group_report`), ``statistics`` (how the intervals were computed) and the markdown tables."""
-    from formation_env.envs.config import EnvConfig
+    from formation_env.sim.config import EnvConfig
     from formation_env.scenarios import get_scenario, scenario_names
     from formation_env.sim.formation import WakeConfig, resolve_coupling, resolve_fidelity
 
@@ -157,14 +157,16 @@ def evaluate(policies: Sequence[str], *, scenario: str, episodes: int = TEST_EPI
         specs[pol.name] = spec
     if ablations:
         from formation_env.scenarios import get_scenario as _scenario
+        from formation_env.sim.layout import ObservationLayout
 
         from .ablation import ablated, parse_ablation
 
         hidden = [parse_ablation(a) for a in ablations]
-        n_vehicles, n_observed = _scenario(scenario).n_vehicles, _scenario(scenario).neighbour_count
+        sc = _scenario(scenario)
         for pol in [p for p in loaded if specs[p.name] not in BASELINES]:
+            layout = ObservationLayout.of(sc.n_vehicles, sc.neighbour_count, pol.observation.options)  # the env's
             for hide in hidden:  # not ``groups``: that is the seed-group argument
-                copy = ablated(pol, hide, n_vehicles, n_observed, pol.neighbour_wind, pol.neighbour_attitude)
+                copy = ablated(pol, hide, layout)
                 loaded.append(copy)
                 specs[copy.name] = specs[pol.name]
     names = [p.name for p in loaded]
@@ -190,7 +192,7 @@ def evaluate(policies: Sequence[str], *, scenario: str, episodes: int = TEST_EPI
         cfg = eval_env_config(scenario, pol.action_mode, turbulence_sigma_mps=turbulence_sigma_mps, wake=wake,
                               turbulence_field=turbulence_field, wake_fidelity=wake_fidelity, throttle_max=throttle_max,
                               leader_reference=leader_reference, control_hz=pol.control_hz, compute_benefit=compute_benefit, duration_s=duration_s,
-                              neighbour_wind=pol.neighbour_wind, neighbour_attitude=pol.neighbour_attitude)
+                              observation=pol.observation)
         t0 = time.perf_counter()
         eps = run_episodes(pol, cfg, seeds, keep_series=True)
         summ = summarise(eps, n_boot=n_boot)

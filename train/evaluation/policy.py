@@ -6,9 +6,11 @@ the evaluation (:mod:`train.evaluation.evaluate`) share it without importing one
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
+
+from formation_env.sim.layout import ObservationLayout
 
 __all__ = ["EvalPolicy"]
 
@@ -25,7 +27,6 @@ class EvalPolicy:
     reset: Callable[[int], None] | None = None
     """Called once by :func:`run_episodes` with the number of rows (formations x learning UAVs)
     before the first decision (stateful policies: a PID's integrators)."""
-    neighbour_wind: bool = False
-    """Trained observing its neighbours' winds (EnvConfig.neighbour_wind): flown with that observation."""
-    neighbour_attitude: bool = False
-    """Trained observing its neighbours' attitudes (EnvConfig.neighbour_attitude): flown with that observation."""
+    observation: ObservationLayout = field(default_factory=ObservationLayout)
+    """The observation layout it was trained on (its sidecar's): flown with its optional groups. The default: no
+    optional group, any formation (a classical agent, or a policy recorded before layouts were)."""

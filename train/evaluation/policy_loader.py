@@ -8,40 +8,18 @@ from pathlib import Path
 
 import numpy as np
 
+from agents.registry import CLASSICAL_AGENTS, classical_agent
+from formation_env.sim.layout import ObservationLayout
+
 from ..config import ACTION_MODES
 from .policy import EvalPolicy
 from ..sb3.config import ALGOS
 
-__all__ = ["CLASSICAL_AGENTS", "classical_agent", "load_policy"]
+__all__ = ["CLASSICAL_AGENTS", "classical_agent", "load_policy", "policy_layout"]
 
 
 def _pid_policy() -> EvalPolicy:
     return EvalPolicy("pid", "residual", lambda obs: np.zeros((obs.shape[0], 4), dtype=np.float32))
-
-
-# the classical agents of the top-level ``agents`` package: spec -> (module, class), imported only when asked for
-CLASSICAL_AGENTS = {"pid_formation": ("agents.pid_formation", "PIDFormation"),
-                    "station_keeper": ("agents.station_keeper", "StationKeeper")}
-
-
-def classical_agent(spec: str, *, neighbour_wind: bool = False, neighbour_attitude: bool = False):
-    """A fresh instance of the classical agent ``spec`` of ``agents/`` (:data:`CLASSICAL_AGENTS`: ``pid_formation``,
-    the formation-keeping controller; ``station_keeper``, the cross-track station keeper), imported only here: a
-    stateful, batched agent (``reset(n_rows)``, ``act(obs)``, ``action_mode``, ``control_hz``); ``neighbour_wind``:
-    its observations carry the neighbours' winds (EnvConfig.neighbour_wind), which their length alone does not say;
-    ``neighbour_attitude`` their attitudes."""
-    import importlib
-
-    module, cls = CLASSICAL_AGENTS[spec]
-    try:
-        agent_class = getattr(importlib.import_module(module), cls)
-    except ModuleNotFoundError as exc:
-        if exc.name not in (module, "agents"):
-            raise
-        raise ValueError(f"policy {spec!r} needs {module.replace('.', '/')}.py, which this checkout does not have") from None
-    # the layout flag only where it is set: an agent class flown on plain observations takes no argument
-    flags = {k: True for k, on in (("neighbour_wind", neighbour_wind), ("neighbour_attitude", neighbour_attitude)) if on}
-    return agent_class(**flags)
 
 
 def _agent_policy(spec: str) -> EvalPolicy:
@@ -78,10 +56,15 @@ def policy_metadata(path: Path) -> dict:
                     "action_guard": (data.get("action_guard") if isinstance(data.get("action_guard"), dict)
                                      else bool(data.get("action_guard", False))),
                     "residual_on": data.get("residual_on"),
-                    "neighbour_wind": bool((data.get("env_kwargs") or {}).get("neighbour_wind", False)),
-                    "neighbour_attitude": bool((data.get("env_kwargs") or {}).get("neighbour_attitude", False)),
+                    **{k: True for k in ObservationLayout.from_dict(None, data.get("env_kwargs") or {}).options},
                     **_stamp(data)}
     return {}
+
+
+def policy_layout(meta: dict) -> ObservationLayout:
+    """The observation layout a policy's metadata records (its ``observation``); metadata written before layouts
+    were recorded: the one its observation switches give (``neighbour_wind: true``, ...), any formation."""
+    return ObservationLayout.from_dict(meta.get("observation"), meta)
 
 
 def warn_task_version(spec: str, meta: dict) -> str | None:
@@ -107,7 +90,8 @@ def warn_task_version(spec: str, meta: dict) -> str | None:
 def load_policy(spec: str, *, action_mode: str | None = None, name: str | None = None, device: str = "cpu") -> EvalPolicy:
     """``"pid"`` (the thesis FCS: zero residual), ``"pid_formation"`` (the classical formation-keeping
     baseline of ``agents.pid_formation``), ``"station_keeper"`` (``agents.station_keeper``), the path of an SB3 zip (its algo and action mode come from
-    the sidecar JSON or the run's config.yaml; ``action_mode`` overrides), or an RLlib checkpoint / run
+    the sidecar JSON or the run's config.yaml; ``action_mode`` overrides; a recurrent PPO's ``reset(n_rows)`` starts
+    its LSTM state, which ``act`` carries from one decision to the next), or an RLlib checkpoint / run
     directory of ``formation-env train --backend rllib`` (its metadata fixes the action mode).
 
     Security: an SB3 zip is read without unpickling anything (:mod:`train.evaluation.safe_zip`; a file that is not
@@ -147,11 +131,14 @@ def load_policy(spec: str, *, action_mode: str | None = None, name: str | None =
     algo = meta.get("algo")
     # no pickle in the zip is unpickled (train/evaluation/safe_zip.py): a policy file cannot run code on load
     model = load_sb3_model(path, algo if algo in ALGOS else None, device=device, label=repr(spec))
+    from ..recurrent import chain_resets, model_policy
 
-    def act(obs: np.ndarray) -> np.ndarray:
-        return model.predict(obs, deterministic=True)[0]
-
-    reset = None
+    # a recurrent policy's reset(n_rows) starts its LSTM state, carried across the decisions of an episode batch
+    act, reset = model_policy(model)
+    try:
+        layout = policy_layout(meta)
+    except (TypeError, ValueError) as exc:
+        raise ValueError(f"policy {spec!r}: its metadata's observation: {exc}") from None
     if meta.get("residual_on") is not None:  # a residual on a classical agent: the agent is part of the policy
         if mode != "setpoints":
             raise ValueError(f"policy {spec!r}: its metadata's residual_on adds to set-points, but it is flown with "
@@ -159,8 +146,8 @@ def load_policy(spec: str, *, action_mode: str | None = None, name: str | None =
         from ..sb3.residual import residual_policy
 
         try:
-            act, reset = residual_policy(act, meta["residual_on"], neighbour_wind=bool(meta.get("neighbour_wind", False)),
-                                         neighbour_attitude=bool(meta.get("neighbour_attitude", False)))
+            act, agent_reset = residual_policy(act, meta["residual_on"], layout=layout)
+            reset = chain_resets(reset, agent_reset)
         except ValueError as exc:
             raise ValueError(f"policy {spec!r}: its metadata's {exc}") from None
     if meta.get("action_guard"):  # trained with the separation guard in the loop: it is part of the policy
@@ -171,10 +158,8 @@ def load_policy(spec: str, *, action_mode: str | None = None, name: str | None =
 
         try:
             # True: the default gains; a mapping: the sidecar's (told the observation's layout: the policy's)
-            act = guarded(act, meta["action_guard"], neighbour_wind=bool(meta.get("neighbour_wind", False)),
-                          neighbour_attitude=bool(meta.get("neighbour_attitude", False)))
+            act = guarded(act, meta["action_guard"], layout=layout)
         except ValueError as exc:
             raise ValueError(f"policy {spec!r}: its metadata's action_guard: {exc}") from None
     return EvalPolicy(name or path.stem, mode, act, float(meta.get("control_hz", 10.0) or 10.0), str(path), reset=reset,
-                      neighbour_wind=bool(meta.get("neighbour_wind", False)),
-                      neighbour_attitude=bool(meta.get("neighbour_attitude", False)))
+                      observation=layout)

@@ -4,9 +4,9 @@ An SB3 zip is a ``data`` member (JSON, some of whose entries are cloudpickle blo
 keyword arguments, the spaces, the schedules) and ``*.pth`` members (torch tensors). Unpickling a blob runs
 whatever code its author put there, so a policy file from elsewhere could run code on load. This loader never
 does: it reads the JSON as JSON, rebuilds each pickled entry from the readable description SB3 stores beside it,
-for the forms this project's trainings write (PPO with ``MlpPolicy`` or the MAPPO ``CentralCriticPolicy``, SAC,
-TD3; Box spaces; the standard activations) and hands those to SB3 as ``custom_objects``, so that SB3 unpickles
-none of them; the tensors SB3 loads with ``torch.load(weights_only=True)``, which builds tensors and plain
+for the forms this project's trainings write (PPO with ``MlpPolicy`` or the MAPPO ``CentralCriticPolicy``,
+sb3-contrib's recurrent PPO with ``MlpLstmPolicy``, SAC, TD3; Box spaces; the standard activations) and hands those
+to SB3 as ``custom_objects``, so that SB3 unpickles none of them; the tensors SB3 loads with ``torch.load(weights_only=True)``, which builds tensors and plain
 containers only. A file that is not such a zip (not a zip, truncated, corrupt, another library's, an entry this
 project does not write) is a ``ValueError`` saying it is not a readable policy, and nothing in it ran.
 """
@@ -25,6 +25,8 @@ NOT_READABLE = "is not a readable policy"
 #: the policy classes this project's zips name: (algo, module SB3 records) -> (module, class)
 _POLICIES = {("ppo", "stable_baselines3.common.policies"): ("stable_baselines3.common.policies", "ActorCriticPolicy"),
              ("ppo", "train.sb3.central_critic"): ("train.sb3.central_critic", "CentralCriticPolicy"),
+             ("recurrent_ppo", "sb3_contrib.common.recurrent.policies"): ("sb3_contrib.common.recurrent.policies",
+                                                                          "RecurrentActorCriticPolicy"),
              ("sac", "stable_baselines3.sac.policies"): ("stable_baselines3.sac.policies", "SACPolicy"),
              ("td3", "stable_baselines3.td3.policies"): ("stable_baselines3.td3.policies", "TD3Policy")}
 _ACTIVATIONS = ("Tanh", "ReLU", "ELU", "LeakyReLU")
@@ -155,18 +157,23 @@ def safe_custom_objects(data: dict, algo: str, label: str) -> dict:
 
 
 def load_sb3_model(path: str | Path, algo: str | None = None, *, device: str = "cpu", label: str | None = None):
-    """The SB3 model in ``path`` (``algo``: "ppo", "sac" or "td3"; None: read off the zip), loaded without
-    unpickling (module docstring); anything else is the ``ValueError`` saying it is not a readable policy."""
+    """The SB3 model in ``path`` (``algo``: "ppo", "recurrent_ppo", "sac" or "td3"; None: read off the zip), loaded
+    without unpickling (module docstring); anything else is the ``ValueError`` saying it is not a readable policy."""
     from stable_baselines3 import PPO, SAC, TD3
 
     label = repr(str(path)) if label is None else label
     data = read_policy_zip(path, label)
-    classes = {"ppo": PPO, "sac": SAC, "td3": TD3}
+    classes = {"ppo": PPO, "recurrent_ppo": None, "sac": SAC, "td3": TD3}
     if algo is None:
         module = str((data.get("policy_class") or {}).get("__module__", ""))
-        algo = "sac" if ".sac." in module else "td3" if ".td3." in module else "ppo"
+        algo = ("sac" if ".sac." in module else "td3" if ".td3." in module
+                else "recurrent_ppo" if module.startswith("sb3_contrib.common.recurrent") else "ppo")
     if algo not in classes:
         raise ValueError(f"algo must be one of {sorted(classes)}, got {algo!r}")
+    if algo == "recurrent_ppo":  # sb3-contrib only for the policies that need it
+        from ..recurrent import recurrent_ppo_class
+
+        classes[algo] = recurrent_ppo_class()
     custom = safe_custom_objects(data, algo, label)
     try:
         return classes[algo].load(str(path), device=device, custom_objects=custom)

@@ -6,12 +6,12 @@ quantities close formation is judged by for the controllers themselves (harvest 
 smallest separation, collision, episode length, and a moving-slot task's success and settling time: enough to recompute their intervals and paired differences).
 The per-decision series and the ablated copies' episodes stay out (the full results are ~30 MB).
 
-    python -m train.publish.levels_record RESULTS_DIR OUT.json [--command "..."] [--overwrite]
+    formation-env publish levels RESULTS_DIR OUT.json [--command "..."] [--overwrite]
 
 The N-UAV records hold several such records, one list per task flown (``{"_about": text, "records": {task:
 [record, ...]}}``: a formation's policies flown on their own task and, without retraining, on others):
 
-    python -m train.publish.levels_record RESULTS_DIR OUT.json --task TASK [--about TEXT] [--command "..."]
+    formation-env publish levels RESULTS_DIR OUT.json --task TASK [--about TEXT] [--command "..."]
 
 adds this record to ``records[TASK]`` of OUT.json (a new file needs ``--about``, what the record holds; an existing
 one keeps its own, unless ``--about`` with ``--overwrite`` replaces it). Adding never drops a record already there.
@@ -19,12 +19,10 @@ one keeps its own, unless ``--about`` with ``--overwrite`` replaces it). Adding 
 
 from __future__ import annotations
 
-import argparse
 import json
-import sys
 from pathlib import Path
 
-__all__ = ["EPISODE_KEYS", "add_to_task_record", "levels_record", "main"]
+__all__ = ["EPISODE_KEYS", "add_to_task_record", "levels_record", "write_levels_record"]
 
 EPISODE_KEYS = ("seed", "duration_s", "harvest_ratio", "rms_along_track_m", "rms_lateral_m", "rms_vertical_m",
                 "min_separation_m", "collision", "formation_saving")
@@ -93,40 +91,21 @@ def add_to_task_record(record: dict, path: str | Path, task: str, *, about: str 
     return whole
 
 
-def main(argv: list[str] | None = None) -> int:
-    p = argparse.ArgumentParser(prog="python -m train.publish.levels_record", description=__doc__.split("\n\n")[0])
-    p.add_argument("results_dir")
-    p.add_argument("out")
-    p.add_argument("--command", help="the evaluate command that made the results (stored in the record)")
-    p.add_argument("--overwrite", action="store_true",
-                   help="replace OUT.json (with --task: replace its '_about' by --about; its records are kept)")
-    p.add_argument("--task", help="add the record to OUT.json's records[TASK] (a multi-task record, e.g. the "
-                                  "N-UAV ones) instead of writing a one-record file")
-    p.add_argument("--about", help="with --task: what the multi-task record holds (required for a new file)")
-    a = p.parse_args(argv)
-    if a.about is not None and a.task is None:
-        print("error: --about belongs to a multi-task record: give --task as well", file=sys.stderr)
-        return 2
+def write_levels_record(results_dir: str | Path, out: str | Path, *, command: str | None = None,
+                        overwrite: bool = False, task: str | None = None, about: str | None = None) -> str:
+    """Write the record of ``results_dir`` to ``out`` (``formation-env publish levels``; see the module docstring):
+    one record, or with ``task`` added to a multi-task record. Returns what was done, in one line; a ValueError or
+    FileExistsError names what is wrong before anything is written."""
     from formation_env.io import atomic_write_text
 
-    src = Path(a.results_dir)
+    if about is not None and task is None:
+        raise ValueError("--about belongs to a multi-task record: give --task as well")
+    src = Path(results_dir)
     if not ((src / "levels.json").is_file() or (src / "results.json").is_file()):
-        print(f"error: {src} has no levels.json or results.json (is it the --out of 'formation-env evaluate'?)",
-              file=sys.stderr)
-        return 2
-    try:
-        rec = levels_record(src, command=a.command)
-        if a.task is not None:
-            whole = add_to_task_record(rec, a.out, a.task, about=a.about, overwrite_about=a.overwrite)
-            print(f"added to {a.out}: records {({k: len(v) for k, v in whole['records'].items()})}")
-            return 0
-        atomic_write_text(a.out, json.dumps(rec, separators=(",", ":")) + "\n", overwrite=a.overwrite)
-    except (FileExistsError, ValueError) as e:
-        print(f"error: {e}", file=sys.stderr)
-        return 2
-    print(f"wrote {a.out}")
-    return 0
-
-
-if __name__ == "__main__":
-    raise SystemExit(main())
+        raise ValueError(f"{src} has no levels.json or results.json (is it the --out of 'formation-env evaluate'?)")
+    rec = levels_record(src, command=command)
+    if task is not None:
+        whole = add_to_task_record(rec, out, task, about=about, overwrite_about=overwrite)
+        return f"added to {out}: records {({k: len(v) for k, v in whole['records'].items()})}"
+    atomic_write_text(out, json.dumps(rec, separators=(",", ":")) + "\n", overwrite=overwrite)
+    return f"wrote {out}"

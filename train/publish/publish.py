@@ -1,6 +1,6 @@
 """Copy a run's best model into ``train/policies/`` with its metadata and learning curve.
 
-    python -m train.publish RUN_DIR NAME [--eval RESULTS_JSON] [--wall-s S] [--stopped-at STEPS]
+    formation-env publish run RUN_DIR NAME [--eval RESULTS_JSON] [--wall-s S] [--stopped-at STEPS]
 
 Writes ``NAME.zip`` (the SB3 model), ``NAME.json`` (env/action mode, exact command, seed, steps, wall
 time, validation and test numbers) and ``NAME_curve.csv`` (every training episode's return) and
@@ -9,15 +9,14 @@ time, validation and test numbers) and ``NAME_curve.csv`` (every training episod
 
 from __future__ import annotations
 
-import argparse
 import json
 import shutil
-import sys
 from pathlib import Path
 
 import yaml
 
 from formation_env.io import atomic_write, atomic_write_json
+from formation_env.sim.layout import OPTIONS as OBSERVATION_OPTIONS
 
 POLICIES = Path(__file__).resolve().parents[1] / "policies"
 
@@ -49,8 +48,7 @@ def publish(run_dir: str | Path, name: str, *, eval_json: str | Path | None = No
         "env": {**{k: best[k] for k in ("algo", "scenario", "action_mode", "control_hz")},
                 **({"action_guard": best["action_guard"]} if best.get("action_guard") else {}),
                 **({"residual_on": best["residual_on"]} if best.get("residual_on") else {}),
-                **({"neighbour_wind": True} if best.get("neighbour_wind") else {}),
-                **({"neighbour_attitude": True} if best.get("neighbour_attitude") else {})},
+                **{k: best[k] for k in ("observation", *OBSERVATION_OPTIONS) if best.get(k)}},
         "command": cfg.get("command"),
         "seed": c["seed"],
         "num_timesteps": best["num_timesteps"],
@@ -101,43 +99,6 @@ def attach_evaluation(names: list[str], eval_json: str | Path, record: str | Pat
                               "wake": rep["wake"], "summary": rep["policies"][name]["summary"],
                               "comparisons": rep.get("comparisons", {}).get(name)}
         atomic_write_json(meta_path, meta, overwrite=True)
-
-
-def main() -> int:
-    ap = argparse.ArgumentParser(prog="python -m train.publish",
-                                 description="Copy a run's model into train/policies/NAME.* with its metadata, curve and "
-                                             "validation history (an existing NAME is never overwritten: remove it first)")
-    ap.add_argument("run_dir")
-    ap.add_argument("name")
-    ap.add_argument("--eval", default=None)
-    ap.add_argument("--wall-s", type=float, default=None)
-    ap.add_argument("--stopped-at", type=int, default=None)
-    ap.add_argument("--note", default=None)
-    ap.add_argument("--model", choices=("best", "final"), default="best")
-    ap.add_argument("--guard", default=None, metavar="JSON",
-                    help="the separation guard's gains the published policy flies with, e.g. '{\"clip_ramp\": 0.25}' "
-                         "(a run trained with the guard in the loop only)")
-    a = ap.parse_args()
-    try:
-        guard = None
-        if a.guard is not None:
-            try:
-                guard = json.loads(a.guard)
-            except json.JSONDecodeError as exc:
-                raise ValueError(f"--guard must be a JSON object of GuardGains fields, got {a.guard!r} ({exc})") from None
-        print(publish(a.run_dir, a.name, eval_json=a.eval, wall_s=a.wall_s, stopped_at=a.stopped_at, note=a.note,
-                      model=a.model, guard=guard))
-    except FileExistsError as e:
-        print(f"error: {a.name} is already published ({e.filename or e}); remove its files first", file=sys.stderr)
-        return 2
-    except (FileNotFoundError, ValueError) as e:
-        print(f"error: {e}", file=sys.stderr)
-        return 2
-    return 0
-
-
-if __name__ == "__main__":
-    raise SystemExit(main())
 
 
 def plot_curves(names: list[str], out: str | Path, *, pid_validation: dict | None = None, bin_steps: int = 20_000) -> Path:

@@ -3,7 +3,7 @@ estimators (SciPy for the per-policy and paired intervals, rliable for the aggre
 seeds x episodes), compare every interval with the one committed, and write the aggregates, the
 performance profiles and marl-eval JSON. Nothing is simulated again and nothing tracked is written.
 
-    python -m train.publish.recompute --out DIR [--n-boot 10000] [--noise-seeds 8]
+    formation-env publish recompute --out DIR [--n-boot 10000] [--noise-seeds 8]
 
 The Monte-Carlo noise of an interval end is the standard deviation of that end over ``--noise-seeds``
 recomputations with other bootstrap seeds (same estimator, same data); the committed end and the
@@ -16,7 +16,6 @@ z, the aggregates of each task, the cross-task aggregates), ``recompute.md`` (th
 
 from __future__ import annotations
 
-import argparse
 import json
 import math
 import sys
@@ -30,13 +29,26 @@ from ..evaluation.comparisons import comparisons, group_report
 from ..evaluation.marl_eval import marl_eval_data, training_steps, write_marl_eval
 from ..evaluation.stats import N_BOOT
 from ..evaluation.summary import summarise
-from ..evaluation.wake_surfing_eval import BASELINE_NAMES, summarise_surfer, surfing_comparisons, surfing_groups
+from ..evaluation import stats as _stats
+from ..evaluation.task_eval import task_groups
 from . import publish
 
 TASKS = ("formation_keeping", "close_formation", "reconfiguration", "wake_surfing")
 #: the task's headline score in the cross-task table (normalised by :func:`normalised_score`)
 HEADLINE = {"formation_keeping": "rms_slot_error_m", "close_formation": "rms_slot_error_m",
             "reconfiguration": "reconfig_success", "wake_surfing": "saving_ratio"}
+
+
+def _evaluator(task: str):
+    """The task's own evaluation hooks (None: the generic evaluation's record)."""
+    from formation_env.tasks import get_task
+
+    return get_task(task).evaluator
+
+
+def _own_policies(rec: dict, eps: dict) -> list[str]:
+    """The policies of a task-evaluation record (its ``policy_specs``: neither a baseline nor a ceiling)."""
+    return [n for n in eps if n in rec["policy_specs"]]
 
 
 def record_path(task: str) -> Path:
@@ -51,10 +63,11 @@ def _episodes(rec: dict) -> dict[str, list[dict]]:
 def recompute_statistics(task: str, rec: dict, *, n_boot: int = N_BOOT, seed: int = 0) -> dict:
     """The record's summaries and paired comparisons (and seed groups) recomputed from its episodes."""
     eps = _episodes(rec)
-    if task == "wake_surfing":
-        names = [n for n in eps if n not in BASELINE_NAMES and not n.startswith("oracle")]
-        return {"controllers": {n: {"summary": summarise_surfer(e, n_boot=n_boot, seed=seed)} for n, e in eps.items()},
-                "comparisons": surfing_comparisons(eps, names, n_boot=n_boot, seed=seed)}
+    ev = _evaluator(task)
+    if ev is not None:  # a task with its own evaluation: its hooks' statistics
+        names = _own_policies(rec, eps)
+        return {"controllers": {n: {"summary": ev.summarise(e, _stats, n_boot=n_boot, seed=seed)} for n, e in eps.items()},
+                "comparisons": ev.comparisons(eps, names, _stats, n_boot=n_boot, seed=seed)}
     baselines = rec["baselines"]
     cands = [n for n in eps if n not in baselines.values()]
     base_eps = {b: eps[b] for b in baselines.values()}
@@ -135,9 +148,9 @@ def _step_counts(names) -> dict[str, int]:
 def task_aggregates(task: str, rec: dict, *, n_boot: int, seed: int = 0) -> tuple[dict, dict, dict]:
     """(aggregates, groups, marl-eval dict) of one record."""
     eps = _episodes(rec)
-    if task == "wake_surfing":
-        names = [n for n in eps if n not in BASELINE_NAMES and not n.startswith("oracle")]
-        groups, baselines = surfing_groups(names), list(BASELINE_NAMES)
+    ev = _evaluator(task)
+    if ev is not None:
+        groups, baselines = task_groups(_own_policies(rec, eps)), list(ev.baseline_names)
     else:
         groups = {g: r["policies"] for g, r in rec.get("groups", {}).items()}
         baselines = list(rec["baselines"].values())
@@ -199,42 +212,34 @@ def markdown(result: dict) -> str:
     return "\n".join(lines) + "\n"
 
 
-def main(argv: list[str] | None = None) -> int:
-    ap = argparse.ArgumentParser(prog="python -m train.publish.recompute", description=__doc__.splitlines()[0])
-    ap.add_argument("--out", required=True, help="a new (or empty) directory for the outputs")
-    ap.add_argument("--n-boot", type=int, default=N_BOOT, help=f"bootstrap resamples (default {N_BOOT})")
-    ap.add_argument("--noise-seeds", type=int, default=8, help="recomputations that measure the Monte-Carlo noise")
-    ap.add_argument("--tasks", nargs="+", default=list(TASKS), choices=TASKS)
-    a = ap.parse_args(argv)
-    if a.n_boot < 100 or a.noise_seeds < 2:
-        print(f"{ap.prog}: error: need --n-boot >= 100 and --noise-seeds >= 2", file=sys.stderr)
-        return 2
+def recompute(out: str | Path, *, n_boot: int = N_BOOT, noise_seeds: int = 8, tasks=TASKS) -> int:
+    """``formation-env publish recompute``: the recomputation of the module docstring for ``tasks``, written to
+    ``out`` (a new or empty directory); ``n_boot`` >= 100 bootstrap resamples, ``noise_seeds`` >= 2 recomputations
+    that measure the Monte-Carlo noise. A bad value is a ValueError naming it, before anything is computed."""
+    unknown = [t for t in tasks if t not in TASKS]
+    if unknown:
+        raise ValueError(f"--tasks: unknown task(s) {unknown}; the committed records are {list(TASKS)}")
+    if n_boot < 100 or noise_seeds < 2:
+        raise ValueError(f"need --n-boot >= 100 and --noise-seeds >= 2, got {n_boot} and {noise_seeds}")
     from formation_env.io import atomic_write_json, atomic_write_text, prepare_output_dir
 
-    try:
-        out = prepare_output_dir(a.out)
-    except FileExistsError as exc:
-        print(f"{ap.prog}: error: {exc}", file=sys.stderr)
-        return 2
-    records = {t: json.loads(record_path(t).read_text()) for t in a.tasks}
-    result: dict = {"n_boot": a.n_boot, "noise_seeds": a.noise_seeds, "tasks": {}}
+    out = prepare_output_dir(out)
+    records = {t: json.loads(record_path(t).read_text()) for t in tasks}
+    result: dict = {"n_boot": n_boot, "noise_seeds": noise_seeds, "tasks": {}}
     groups = {}
     for task, rec in records.items():
         print(f"{task}: recomputing ...", file=sys.stderr)
-        agg, groups[task], data = task_aggregates(task, rec, n_boot=a.n_boot)
-        result["tasks"][task] = {"comparison": compare_intervals(task, rec, n_boot=a.n_boot, noise_seeds=a.noise_seeds),
+        agg, groups[task], data = task_aggregates(task, rec, n_boot=n_boot)
+        result["tasks"][task] = {"comparison": compare_intervals(task, rec, n_boot=n_boot, noise_seeds=noise_seeds),
                                  "aggregates": agg, "groups": groups[task]}
         write_marl_eval(out / f"{task}_marl_eval.json", data)
         plot_profiles(out / f"{task}_performance_profile.png", profile_panels(agg),
                       title=f"{task}: {len(rec['seeds'])} held-out episodes")
     if set(TASKS) <= set(records):
-        result["cross_task"] = cross_task(records, groups, n_boot=a.n_boot)
+        result["cross_task"] = cross_task(records, groups, n_boot=n_boot)
     atomic_write_json(out / "recompute.json", result)
     text = markdown(result)
     atomic_write_text(out / "recompute.md", text)
     print(text)
     return 0
 
-
-if __name__ == "__main__":
-    sys.exit(main())

@@ -1,8 +1,8 @@
 """Evaluate the committed policies (3 training seeds per task) beside the thesis PID and ``pid_formation``
 on 100 held-out test episodes, attach the results to their metadata and draw the README figures.
 
-    python -m train.publish.report_committed --out DIR [--episodes 100] [--tasks ...]   # all under DIR
-    python -m train.publish.report_committed --overwrite [--episodes 100]   # into the tracked files
+    formation-env publish committed --out DIR [--episodes 100] [--tasks ...]   # all under DIR
+    formation-env publish committed --overwrite [--episodes 100]   # into the tracked files
 
 For each task: ``formation-env evaluate`` with the three seeds, ``pid`` and ``pid_formation`` (frozen
 Dryden turbulence sigma 1 m/s, wake on, seeds 20000000000..), written to ``OUT/<task>/``; the slim record
@@ -21,7 +21,6 @@ file it may not write.
 
 from __future__ import annotations
 
-import argparse
 import json
 import os
 import shutil
@@ -99,66 +98,46 @@ def _validation_baselines(task: str, episodes: int) -> dict:
     return {f"{n} (validation)": val["policies"][n]["summary"]["rms_slot_error_m"] for n in ("pid", "pid_formation")}
 
 
-def _parser() -> argparse.ArgumentParser:
-    def episodes(text: str) -> int:
-        try:
-            value = int(text)
-        except ValueError:
-            value = 0
-        if not 1 <= value <= MAX_EPISODES:
-            raise argparse.ArgumentTypeError(f"must be an integer in [1, {MAX_EPISODES}], got {text!r}")
-        return value
-
-    ap = argparse.ArgumentParser(prog="python -m train.publish.report_committed", description=__doc__.splitlines()[0])
-    ap.add_argument("--out", default=DEFAULT_OUT,
-                    help=f"output directory (default {DEFAULT_OUT}): the evaluations, and without --overwrite "
-                         "also the records, metadata (policies/) and figures (figures/)")
-    ap.add_argument("--overwrite", action="store_true",
-                    help="write the records, metadata and figures into train/policies/ and docs/figures/ (tracked)")
-    ap.add_argument("--episodes", type=episodes, default=100, help="held-out test episodes per policy (default 100)")
-    ap.add_argument("--validation-episodes", type=episodes, default=32,
-                    help="validation episodes of the baselines' lines in training_curves.png (default 32)")
-    ap.add_argument("--tasks", nargs="+", default=list(TASKS), choices=TASKS)
-    return ap
-
-
-def main(argv: list[str] | None = None) -> int:
-    a = _parser().parse_args(argv)
-    out = Path(a.out)
-    try:
-        p = check_plan(out, a.tasks, overwrite=a.overwrite)
-    except ValueError as exc:
-        print(f"{_parser().prog}: error: {exc}", file=sys.stderr)
-        return 2
+def report_committed(out: str | Path = DEFAULT_OUT, *, overwrite: bool = False, episodes: int = 100,
+                     validation_episodes: int = 32, tasks=TASKS) -> int:
+    """``formation-env publish committed``: evaluate the committed policies of ``tasks`` on ``episodes`` held-out
+    episodes and write the records, metadata and figures (see the module docstring); ``validation_episodes``: the
+    baselines' lines in training_curves.png. Every input and output is checked (a ValueError naming it) before
+    the first episode flies."""
+    unknown = [t for t in tasks if t not in TASKS]
+    if unknown:
+        raise ValueError(f"--tasks: unknown task(s) {unknown}; the committed ones are {list(TASKS)}")
+    if not (1 <= episodes <= MAX_EPISODES and 1 <= validation_episodes <= MAX_EPISODES):
+        raise ValueError(f"episodes must be integers in [1, {MAX_EPISODES}], got {episodes} and {validation_episodes}")
+    out = Path(out)
+    p = check_plan(out, tasks, overwrite=overwrite)
     print(f"writing the evaluations to {out}/, records and metadata to {p['policies']}/, figures to {p['figures']}/",
           file=sys.stderr)
     baselines = {}
-    for task in a.tasks:
+    for task in tasks:
         names = policy_names(task)
         rep = evaluate([str(publish.POLICIES / f"{n}.zip") for n in names] + ["pid", "pid_formation"], scenario=task,
-                       episodes=a.episodes, out_dir=p["eval"][task], overwrite=a.overwrite, log=print)
+                       episodes=episodes, out_dir=p["eval"][task], overwrite=overwrite, log=print)
         print(rep["table_markdown"])
         print(rep.get("comparison_markdown", ""))
         print(rep.get("groups_markdown", ""))
         attach_evaluation(names, p["eval"][task] / "results.json",
-                          p["policies"] / f"{task}_ppo_setpoints_evaluation.json", overwrite=a.overwrite,
+                          p["policies"] / f"{task}_ppo_setpoints_evaluation.json", overwrite=overwrite,
                           meta_dir=p["policies"])
         print(rep.get("aggregates_markdown", ""))
         for fig in ("slot_error", "performance_profile"):  # the profile needs rliable (the evaluation extra)
             if fig == "performance_profile" and not (p["eval"][task] / f"{fig}.png").is_file():
                 continue
             atomic_write(p["figures"] / f"eval_{task}_{fig}.png",
-                         lambda tmp, src=p["eval"][task] / f"{fig}.png": shutil.copyfile(src, tmp), overwrite=a.overwrite)
-        baselines[task] = _validation_baselines(task, a.validation_episodes)
+                         lambda tmp, src=p["eval"][task] / f"{fig}.png": shutil.copyfile(src, tmp), overwrite=overwrite)
+        baselines[task] = _validation_baselines(task, validation_episodes)
     for task in TASKS:  # the figure shows every task: the baselines of those not re-evaluated are measured too
         if task not in baselines:
-            baselines[task] = _validation_baselines(task, a.validation_episodes)
-    atomic_write_json(out / "validation_baselines.json", baselines, overwrite=a.overwrite)
+            baselines[task] = _validation_baselines(task, validation_episodes)
+    atomic_write_json(out / "validation_baselines.json", baselines, overwrite=overwrite)
     plot_validation_curves({t: policy_names(t) for t in TASKS}, p["figures"] / "training_curves.png",
                            baselines=baselines)
     print(f"done: evaluations in {out}/<task>/, records and metadata in {p['policies']}/, figures in {p['figures']}/")
     return 0
 
 
-if __name__ == "__main__":
-    sys.exit(main())

@@ -9,6 +9,8 @@ import re
 import tempfile
 from pathlib import Path
 
+from formation_env.sim.layout import ObservationLayout
+
 from ..config import env_config_for
 from .config import RLlibTrainConfig
 
@@ -26,7 +28,7 @@ def checkpoint_metadata(cfg: RLlibTrainConfig, *, iteration: int, env_steps: int
     return {"backend": "rllib", "algo": "ppo", "scenario": cfg.scenario, "action_mode": cfg.action_mode,
             "learning": cfg.learning, "policies": cfg.policies, "modules": cfg.modules, "control_hz": env.control_hz,
             "seed": cfg.seed, "iteration": int(iteration), "env_steps": int(env_steps), "ray_version": ray.__version__,
-            "neighbour_wind": bool(env.neighbour_wind), "neighbour_attitude": bool(env.neighbour_attitude)}
+            "observation": ObservationLayout.for_config(env).to_dict()}
 
 
 def latest_rllib_checkpoint(run_dir: str | Path) -> tuple[Path, int] | None:

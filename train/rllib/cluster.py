@@ -16,6 +16,10 @@ __all__ = ["require_rllib", "parse_address", "check_reachable", "connect", "runn
            "DISTRIBUTED_INSTALL"]
 
 DISTRIBUTED_INSTALL = 'pip install -e ".[distributed]"'
+# Ray puts the driver's script directory and working directory first on each worker's sys.path, where a user's own
+# train.py or agents/ would stand in for the project's packages when a worker unpickles the env: each worker binds
+# the names to the project's packages before it runs anything (formation_env.own_packages)
+WORKER_RUNTIME_ENV = {"worker_process_setup_hook": "formation_env.own_packages.bind"}
 
 
 def require_rllib() -> None:
@@ -103,7 +107,7 @@ def _join(address: str, label: str) -> None:
 
     _use_cluster_token()
     try:
-        ray.init(address=address, logging_level="ERROR")
+        ray.init(address=address, logging_level="ERROR", runtime_env=WORKER_RUNTIME_ENV)
     except (ConnectionError, TimeoutError, RuntimeError) as exc:
         chain, e = [], exc
         while e is not None:
@@ -140,7 +144,7 @@ def connect(address: str | None = None, *, num_cpus: int | None = None, log: Cal
         # 127.0.0.1 into that) and its servers listen on every interface; its token authentication, on
         # by default, guards them.
         ray.init(address="local", num_cpus=num_cpus, include_dashboard=False, logging_level="ERROR",
-                 configure_logging=True)
+                 configure_logging=True, runtime_env=WORKER_RUNTIME_ENV)
         node = ray.nodes()[0].get("NodeManagerAddress", "?")
         log(f"started a local Ray instance ({int(ray.cluster_resources().get('CPU', 0))} CPUs, node address {node})")
         return True

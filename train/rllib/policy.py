@@ -7,6 +7,8 @@ from pathlib import Path
 
 import numpy as np
 
+from formation_env.sim.layout import ObservationLayout
+
 from ..evaluation.policy import EvalPolicy
 from .checkpoints import CHECKPOINT_META, latest_rllib_checkpoint
 from .cluster import require_rllib
@@ -52,5 +54,4 @@ def load_rllib_policy(spec: str | Path, *, name: str | None = None, module_id: s
     run_name = path.resolve().parent.parent.name
     label = name or f"{'' if 'rllib' in run_name else 'rllib-'}{run_name}-{path.name}"
     return EvalPolicy(label, meta["action_mode"], act, float(meta.get("control_hz", 10.0)), str(path),
-                      neighbour_wind=bool(meta.get("neighbour_wind", False)),
-                      neighbour_attitude=bool(meta.get("neighbour_attitude", False)))
+                      observation=ObservationLayout.from_dict(meta.get("observation"), meta))

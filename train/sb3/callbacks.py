@@ -63,15 +63,16 @@ def build_callbacks(cfg: TrainConfig, run_dir: Path, state: dict, log: Callable[
         def __init__(self):
             super().__init__()
             from formation_env.scenarios import get_scenario
+            from formation_env.sim.layout import ObservationLayout
 
             self.next = (state["start_steps"] // cfg.eval_freq + 1) * cfg.eval_freq if cfg.eval_freq else None
             env = make_env_config(cfg)
             full = get_scenario(cfg.scenario).duration_s
             short = env.duration_s if env.duration_s is not None and env.duration_s < full else None
             # validated with the leader the run trains with (EnvConfig.leader_reference; None: the scenario's)
+            self.layout = ObservationLayout.for_config(env)  # the run's observations
             self.config = eval_env_config(cfg.scenario, cfg.action_mode, control_hz=env.control_hz, duration_s=short,
-                                          leader_reference=env.leader_reference, neighbour_wind=env.neighbour_wind,
-                                          neighbour_attitude=env.neighbour_attitude)
+                                          leader_reference=env.leader_reference, observation=self.layout)
             self.seeds = [VALIDATION_SEED_BASE + i for i in range(cfg.eval_episodes)]
             if short is not None:
                 log(f"note: validation episodes cut to {short:g} s like the training's (the test set flies {full:g} s)")
@@ -86,19 +87,19 @@ def build_callbacks(cfg: TrainConfig, run_dir: Path, state: dict, log: Callable[
             return True
 
         def evaluate(self) -> None:
+            from ..recurrent import chain_resets, model_policy
+
             model = self.model
-            act = lambda o: model.predict(o, deterministic=True)[0]  # noqa: E731
-            reset = None
+            act, reset = model_policy(model)  # a recurrent model's LSTM state carried across the decisions
             if cfg.residual_on is not None:
                 from .residual import residual_policy
 
-                act, reset = residual_policy(act, cfg.residual_on, neighbour_wind=self.config.neighbour_wind,
-                                             neighbour_attitude=self.config.neighbour_attitude)
+                act, agent_reset = residual_policy(act, cfg.residual_on, layout=self.layout)
+                reset = chain_resets(reset, agent_reset)
             if cfg.action_guard:
                 from .guard import guarded
 
-                act = guarded(act, cfg.action_guard, neighbour_wind=self.config.neighbour_wind,
-                              neighbour_attitude=self.config.neighbour_attitude)
+                act = guarded(act, cfg.action_guard, layout=self.layout)
             summ = summarise(run_episodes(FunctionPolicy(act, reset), self.config, self.seeds))
             score = selection_score(summ, cfg.selection_collision_cost)
             entry = {"num_timesteps": int(self.num_timesteps), "score": score, **summ}

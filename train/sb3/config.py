@@ -1,6 +1,6 @@
 """The SB3 training configuration: a validated dataclass built from RL-Zoo-style YAML files.
 
-``train/hyperparams/{ppo,sac,td3}.yml`` hold one section per scenario (and a ``default`` section
+``train/hyperparams/{ppo,recurrent_ppo,sac,td3}.yml`` hold one section per scenario (and a ``default`` section
 used for scenarios without their own), in the style of the RL Baselines3 Zoo::
 
     formation_keeping:
@@ -42,29 +42,33 @@ from ..config import (ACTION_MODES, ENV_KEYS, HYPERPARAMS_DIR, MIN_VALIDATION_EP
 
 __all__ = ["ALGOS", "TrainConfig", "load_hyperparams", "make_env_config"]
 
-ALGOS = ("ppo", "sac", "td3")
+# recurrent_ppo: sb3-contrib's RecurrentPPO (an LSTM before the actor's and the critic's MLPs), on the same VecEnv
+ALGOS = ("ppo", "recurrent_ppo", "sac", "td3")
 
 _TRAIN_KEYS = {"n_timesteps", "n_formations", "policy", "policy_kwargs", "env_kwargs", "eval_freq",
                "eval_episodes", "checkpoint_freq", "torch_threads", "reward_scale", "init_policy", "action_guard",
                "selection_collision_cost", "residual_on"}
+_PPO_KEYS = {"learning_rate", "n_steps", "batch_size", "n_epochs", "gamma", "gae_lambda", "clip_range", "clip_range_vf",
+             "normalize_advantage", "ent_coef", "vf_coef", "max_grad_norm", "use_sde", "sde_sample_freq", "target_kl"}
 _ALGO_KEYS = {
-    "ppo": {"learning_rate", "n_steps", "batch_size", "n_epochs", "gamma", "gae_lambda", "clip_range",
-            "clip_range_vf", "normalize_advantage", "ent_coef", "vf_coef", "max_grad_norm", "use_sde",
-            "sde_sample_freq", "target_kl"},
+    "ppo": _PPO_KEYS,
+    "recurrent_ppo": _PPO_KEYS,
     "sac": {"learning_rate", "buffer_size", "learning_starts", "batch_size", "tau", "gamma", "train_freq",
             "gradient_steps", "ent_coef", "target_update_interval", "target_entropy", "use_sde",
             "sde_sample_freq", "use_sde_at_warmup", "action_noise"},
     "td3": {"learning_rate", "buffer_size", "learning_starts", "batch_size", "tau", "gamma", "train_freq",
             "gradient_steps", "policy_delay", "target_policy_noise", "target_noise_clip", "action_noise"},
 }
+_LSTM_KWARGS = {"lstm_hidden_size", "n_lstm_layers", "shared_lstm", "enable_critic_lstm"}  # recurrent_ppo's only
 _POLICY_KWARGS = {"net_arch", "log_std_init", "activation_fn", "ortho_init", "squash_output", "n_critics",
-                  "use_expln", "full_std", "share_features_extractor"}
+                  "use_expln", "full_std", "share_features_extractor", *_LSTM_KWARGS}
 
 MAX_TIMESTEPS = 10**9  # as the CLI's --steps (formation_env.cli._args.MAX_TRAIN_STEPS; a test holds them equal)
 ACTIVATIONS = ("tanh", "relu", "elu", "leaky_relu")  # policy_kwargs.activation_fn (train/sb3/train.py maps them)
 # the vector envs' observations are flat Boxes; CentralCriticPolicy (PPO only): MAPPO's centralised critic on the
-# agent-specific global state, the actor on the agent's own observation (train/sb3/central_critic.py)
-POLICIES = ("MlpPolicy", "CentralCriticPolicy")
+# agent-specific global state, the actor on the agent's own observation (train/sb3/central_critic.py);
+# MlpLstmPolicy (recurrent_ppo only): sb3-contrib's LSTM policy
+POLICIES = ("MlpPolicy", "CentralCriticPolicy", "MlpLstmPolicy")
 
 #: hyperparameter -> (kind, min, max, what): kind "int", "float", "bool", "float?" (None allowed); min and
 #: max inclusive, except a float min marked exclusive by being in _EXCLUSIVE_MIN. "ent_coef", "target_entropy"
@@ -108,6 +112,10 @@ POLICY_KWARGS_RANGES: dict[str, tuple[str, float, float, str]] = {
     "use_expln": ("bool", 0, 1, ""),
     "full_std": ("bool", 0, 1, ""),
     "share_features_extractor": ("bool", 0, 1, ""),
+    "lstm_hidden_size": ("int", 1, 4096, "LSTM units (recurrent_ppo)"),
+    "n_lstm_layers": ("int", 1, 8, "stacked LSTM layers (recurrent_ppo)"),
+    "shared_lstm": ("bool", 0, 1, "the critic reads the actor's LSTM (recurrent_ppo)"),
+    "enable_critic_lstm": ("bool", 0, 1, "the critic has its own LSTM (recurrent_ppo)"),
 }
 MAX_LAYER_WIDTH = 65_536
 
@@ -337,6 +345,9 @@ class TrainConfig:
             raise ValueError(f"policy must be one of {POLICIES} (the envs' observations are flat), got {self.policy!r}")
         if self.policy == "CentralCriticPolicy" and self.algo != "ppo":
             raise ValueError(f"policy CentralCriticPolicy (MAPPO's centralised critic) needs algo ppo, got {self.algo!r}")
+        if (self.policy == "MlpLstmPolicy") != (self.algo == "recurrent_ppo"):
+            raise ValueError(f"policy MlpLstmPolicy goes with algo recurrent_ppo and only with it, got policy "
+                             f"{self.policy!r} with algo {self.algo!r}")
         for name in ("algo_kwargs", "policy_kwargs", "env_kwargs"):
             if not isinstance(getattr(self, name), dict):
                 label = "hyperparameters" if name == "algo_kwargs" else name
@@ -344,9 +355,10 @@ class TrainConfig:
         bad = sorted(set(self.algo_kwargs) - _ALGO_KEYS[self.algo])
         if bad:
             raise ValueError(f"unknown {self.algo} hyperparameter(s) {bad}; valid: {sorted(_ALGO_KEYS[self.algo] | _TRAIN_KEYS)}")
-        bad = sorted(set(self.policy_kwargs) - _POLICY_KWARGS)
+        known = _POLICY_KWARGS if self.algo == "recurrent_ppo" else _POLICY_KWARGS - _LSTM_KWARGS
+        bad = sorted(set(self.policy_kwargs) - known)
         if bad:
-            raise ValueError(f"unknown policy_kwargs key(s) {bad}; valid: {sorted(_POLICY_KWARGS)}")
+            raise ValueError(f"unknown policy_kwargs key(s) {bad} for {self.algo}; valid: {sorted(known)}")
         bad = sorted(set(self.env_kwargs) - ENV_KEYS)
         if bad:
             raise ValueError(f"unknown env_kwargs key(s) {bad}; valid: {sorted(ENV_KEYS)}")
@@ -377,16 +389,18 @@ class TrainConfig:
 
 
 def _check_batch_fits(cfg: TrainConfig, env) -> None:
-    """A minibatch fits in what it is drawn from: PPO's rollout (n_steps x env indices), SAC/TD3's replay buffer."""
+    """A minibatch fits in what it is drawn from: (recurrent) PPO's rollout (n_steps x env indices), SAC/TD3's replay
+    buffer."""
     kw = cfg.algo_kwargs
-    batch = kw.get("batch_size", 64 if cfg.algo == "ppo" else 256)  # SB3's defaults
-    if cfg.algo == "ppo":
+    on_policy = cfg.algo in ("ppo", "recurrent_ppo")
+    batch = kw.get("batch_size", {"ppo": 64, "recurrent_ppo": 128}.get(cfg.algo, 256))  # SB3's / sb3-contrib's defaults
+    if on_policy:
         from formation_env.scenarios import get_scenario
 
         n = get_scenario(cfg.scenario).n_vehicles
         agents = max({"all": n, "followers": n - 1}[env.learning] if isinstance(env.learning, str)
                      else len(env.learning), 1)  # (a one-UAV scenario's env makes its UAV the agent)
-        n_steps = kw.get("n_steps", 2048)
+        n_steps = kw.get("n_steps", 2048 if cfg.algo == "ppo" else 128)
         rollout = n_steps * cfg.n_formations * agents
         if batch > rollout:
             raise ValueError(f"batch_size {batch} is larger than the rollout it is drawn from: n_steps {n_steps} x "

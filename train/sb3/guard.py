@@ -28,28 +28,28 @@ def guard_gains(spec):
     return GuardGains(**spec)
 
 
-def guarded(act, gains=None, neighbour_wind: bool = False, neighbour_attitude: bool = False):
+def guarded(act, gains=None, layout=None):
     """``act(obs) -> actions`` followed by the separation guard (the evaluation's and the validation's policy);
     ``gains``: an ``action_guard`` setting (:func:`guard_gains`: None or True for the defaults, or a dict);
-    ``neighbour_wind``, ``neighbour_attitude``: the observations carry the neighbours' winds, attitudes (the policy's
-    EnvConfig options)."""
+    ``layout``: the observations' :class:`~formation_env.sim.layout.ObservationLayout` (the policy's; None: no
+    optional group)."""
     from agents.separation_guard import SeparationGuard
 
-    guard = SeparationGuard(guard_gains(gains), neighbour_wind=neighbour_wind, neighbour_attitude=neighbour_attitude)
+    guard = SeparationGuard(guard_gains(gains), layout=layout)
     return lambda obs: guard.filter(obs, act(obs))
 
 
 class GuardedVecEnv(VecEnvWrapper):
     """``venv`` (a :class:`~formation_env.envs.FormationVecEnv` of set-point actions, or a wrapper of one that keeps
     its observations) whose actions pass through the separation guard, judged on the last observations (after an
-    episode's end the next episode's first: the VecEnv resets automatically)."""
+    episode's end the next episode's first: the VecEnv resets automatically). ``layout``: the observations'
+    ObservationLayout (None: no optional group)."""
 
-    def __init__(self, venv, gains=None, neighbour_wind: bool = False, neighbour_attitude: bool = False) -> None:
+    def __init__(self, venv, gains=None, layout=None) -> None:
         from agents.separation_guard import SeparationGuard
 
         super().__init__(venv)
-        self.guard = SeparationGuard(guard_gains(gains), neighbour_wind=neighbour_wind,
-                                     neighbour_attitude=neighbour_attitude)
+        self.guard = SeparationGuard(guard_gains(gains), layout=layout)
         self._obs: np.ndarray | None = None
 
     def reset(self):

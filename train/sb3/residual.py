@@ -38,11 +38,10 @@ def check_residual_on(spec) -> dict:
     return {"agent": agent, "scale": float(scale)}
 
 
-def _agent(spec: dict, neighbour_wind: bool = False, neighbour_attitude: bool = False):
-    from ..evaluation.policy_loader import classical_agent
+def _agent(spec: dict, layout=None):
+    from agents.registry import classical_agent
 
-    # told the observation's layout
-    agent = classical_agent(spec["agent"], neighbour_wind=neighbour_wind, neighbour_attitude=neighbour_attitude)
+    agent = classical_agent(spec["agent"], layout=layout)  # told the observation's layout
     if agent.action_mode != "setpoints":  # pragma: no cover - RESIDUAL_AGENTS lists set-point agents only
         raise ValueError(f"residual_on: {spec['agent']} flies {agent.action_mode!r}, not set-points")
     return agent
@@ -52,12 +51,12 @@ def _combine(base: np.ndarray, a: np.ndarray, scale: float) -> np.ndarray:
     return np.clip(np.asarray(base, dtype=float) + scale * np.asarray(a, dtype=float), -1.0, 1.0)
 
 
-def residual_policy(act, spec, neighbour_wind: bool = False, neighbour_attitude: bool = False):
+def residual_policy(act, spec, layout=None):
     """``(act', reset)``: the evaluation's and the validation's policy of a residual learner ``act(obs) -> a``;
-    ``reset(n_rows)`` restarts the agent's integrators (every batch of episodes); ``neighbour_wind``: the
-    observations carry the neighbours' winds (the policy's EnvConfig option); ``neighbour_attitude`` their attitudes."""
+    ``reset(n_rows)`` restarts the agent's integrators (every batch of episodes); ``layout``: the observations'
+    :class:`~formation_env.sim.layout.ObservationLayout` (the policy's; None: no optional group)."""
     spec = check_residual_on(spec)
-    agent = _agent(spec, neighbour_wind, neighbour_attitude)
+    agent = _agent(spec, layout)
 
     def combined(obs):
         return _combine(agent.act(obs), act(obs), spec["scale"])
@@ -68,12 +67,12 @@ def residual_policy(act, spec, neighbour_wind: bool = False, neighbour_attitude:
 class ResidualVecEnv(VecEnvWrapper):
     """``venv`` (set-point actions) whose actions are the agent's set-points plus ``scale`` times the learner's,
     the agent acting on the last observations (after an episode's end, the next episode's first: the VecEnv resets
-    automatically, and the agent's rows restart with it)."""
+    automatically, and the agent's rows restart with it). ``layout``: the observations' ObservationLayout."""
 
-    def __init__(self, venv, spec, neighbour_wind: bool = False, neighbour_attitude: bool = False) -> None:
+    def __init__(self, venv, spec, layout=None) -> None:
         super().__init__(venv)
         self.spec = check_residual_on(spec)
-        self.agent = _agent(self.spec, neighbour_wind, neighbour_attitude)
+        self.agent = _agent(self.spec, layout)
         self._obs: np.ndarray | None = None
 
     def reset(self):

@@ -9,6 +9,8 @@ import json
 import re
 from pathlib import Path
 
+from formation_env.sim.layout import ObservationLayout
+
 from ..config import task_stamp
 from .config import TrainConfig, make_env_config
 
@@ -56,10 +58,7 @@ def run_metadata(cfg: TrainConfig, steps: int, extra: dict | None = None) -> dic
          "seed": cfg.seed, "num_timesteps": int(steps)}
     if cfg.action_guard:
         d["action_guard"] = cfg.action_guard  # True, or the guard's gains
-    if env.neighbour_wind:
-        d["neighbour_wind"] = True  # an observation option the policy must be flown with
-    if env.neighbour_attitude:
-        d["neighbour_attitude"] = True  # the same
+    d["observation"] = ObservationLayout.for_config(env).to_dict()  # the groups the policy must be flown with
     if cfg.residual_on is not None:
         d["residual_on"] = cfg.residual_on  # the agent the learner's actions are added to, and their scale
     d.update(task_stamp(cfg.scenario, cfg.env_kwargs, cfg.action_mode))

@@ -54,6 +54,10 @@ def default_run_dir(scenario: str, algo: str, action_mode: str, seed: int, root:
 
 
 def _algo_class(algo: str):
+    if algo == "recurrent_ppo":  # sb3-contrib only where asked for: the other algorithms run without it
+        from ..recurrent import recurrent_ppo_class
+
+        return recurrent_ppo_class()
     from stable_baselines3 import PPO, SAC, TD3
 
     return {"ppo": PPO, "sac": SAC, "td3": TD3}[algo]
@@ -110,16 +114,15 @@ def make_train_env(cfg: TrainConfig, seed: int):
 
     env_config = make_env_config(cfg)
     env = FormationVecEnv(cfg.n_formations, env_config, seed=seed)
+    layout = env.observation_layout  # the observations the guard and the residual's agent read
     if cfg.action_guard:  # the separation guard filters the policy's set-points (inside MAPPO's global state)
         from .guard import GuardedVecEnv
 
-        env = GuardedVecEnv(env, cfg.action_guard, neighbour_wind=env_config.neighbour_wind,
-                            neighbour_attitude=env_config.neighbour_attitude)
+        env = GuardedVecEnv(env, cfg.action_guard, layout=layout)
     if cfg.residual_on is not None:  # the agent's set-points plus the learner's (outside the guard: it filters the sum)
         from .residual import ResidualVecEnv
 
-        env = ResidualVecEnv(env, cfg.residual_on, neighbour_wind=env_config.neighbour_wind,
-                             neighbour_attitude=env_config.neighbour_attitude)
+        env = ResidualVecEnv(env, cfg.residual_on, layout=layout)
     if cfg.policy == "CentralCriticPolicy":  # MAPPO: every row gets its formation's agent-specific global state
         from .central_critic import GlobalStateVecEnv
 

@@ -18,6 +18,7 @@ from __future__ import annotations
 from ...scenarios import Scenario, SlotSchedule
 from ...sim.config import Randomisation, RewardWeights
 from ..base import EvaluationProtocol, Task, register_task
+from . import optimum as _optimum
 
 __all__ = ["SCENARIO", "TASK", "CLOSE_FORMATION_REWARD", "CLOSE_FORMATION_RANDOMISATION"]
 
@@ -47,7 +48,7 @@ TASK = register_task(Task("close_formation", SCENARIO, "formation_env/CloseForma
                           guard="separation_guard", guard_options={"clip_ramp": 0.25},
                           evaluation=EvaluationProtocol(levels=(0.0, 0.5, 1.0, 1.5), metric="harvest_ratio"),
                           baselines=("pid", "pid_formation", "station_keeper"),
-                          reference="formation_env.tasks.close_formation.optimum",
+                          reference=_optimum,
                           description="hold the ELL induced-drag optimum slot",
                           # the follower starts a tenth of a span (std, per axis) off its slot: the scale on
                           # which the saving changes, and without it the calm-air test episodes are all one

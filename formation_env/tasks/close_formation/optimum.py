@@ -22,13 +22,12 @@ single-peaked one) and :func:`exclusion_band` picks the smallest band |z| < z_ex
 every lateral profile is single-peaked; :func:`find_optimum` searches only outside it. Outside the
 band the saving grows monotonically towards the sheet, so the optimum lies on the band's edge.
 
-``python -m formation_env.tasks.close_formation.optimum`` rewrites the cached
-map (``formation_env/data/close_formation_map.json``) and, optionally, the figure.
+``formation-env data optimum close_formation`` rewrites the cached map
+(``formation_env/data/close_formation_map.json``) and ``formation-env data saving-map PATH`` draws its figure.
 """
 
 from __future__ import annotations
 
-import argparse
 import dataclasses
 import json
 from dataclasses import dataclass
@@ -372,17 +371,3 @@ def optimum_saving(cache: dict | None = None) -> float:
     band |z| < 0.1 b, the lift-matched wing of the load-weighted coupling) 0.36657 at (-2, 0.9635, 0.1) b."""
     c = load_cache() if cache is None else cache
     return float(c["optimum"]["saving"])
-
-
-def main(argv=None) -> int:
-    p = argparse.ArgumentParser(description="Rewrite the cached close-formation map (the figure: "
-                                             "python -m formation_env.plotting.saving_map PATH).")
-    p.add_argument("--cache", default=str(CACHE_PATH))
-    a = p.parse_args(argv)
-    path = write_cache(a.cache)
-    print(f"wrote {path}")
-    return 0
-
-
-if __name__ == "__main__":
-    raise SystemExit(main())

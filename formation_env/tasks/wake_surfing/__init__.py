@@ -1,5 +1,5 @@
 """Task ``wake_surfing`` (issue 16): its scenario, preset, reference optimum (:mod:`.optimum`), metrics
-(:mod:`.metrics`) and baselines in one unit.
+(:mod:`.metrics`), baselines and evaluation (:mod:`.evaluation`, :mod:`.controllers`) in one unit.
 
 Preset: the follower moves its slot set-point within the safe box
 (``setpoints``: along-track fixed, lateral and vertical over the box, speed +-2 m/s) and is paid
@@ -28,7 +28,7 @@ from __future__ import annotations
 
 import dataclasses
 
-from ...scenarios import Scenario, SlotSchedule
+from ...scenarios import Scenario, SlotSchedule, register_scenario
 from ...sim.config import Randomisation, RewardWeights
 from ..base import EvaluationProtocol, Task, register_task
 
@@ -56,7 +56,7 @@ SCENARIO = Scenario(
     slots=(SlotSchedule(((0.0, (-2.0, 1.0, 0.3)),)),),
     safe_box_b=((-12.0, -0.5), (0.0, 2.0), (-0.4, 0.8)),
     # the set-point reaches 0.5 b beyond the box sideways and 1 b up and down (issue 24): with the map stopping at the
-    # walls, station_keeper told the optimum (train.evaluation.wake_surfing_rollout.OracleKeeper, then on the
+    # walls, station_keeper told the optimum (.controllers.OracleKeeper, then on the
     # lattice-era box's floor) reached 0.66 of it at sigma 0.25 (12 % of decisions outside): the thesis altitude loop
     # gives 0.03 rad of pitch per m of set-point, and a set-point held at a wall leaves it none to pull a follower back;
     # with this reach, 0.88 (0.3 % outside; 8 training-range episodes each)
@@ -65,6 +65,9 @@ SCENARIO = Scenario(
     wake_coupling="load_weighted",
     # the converged wake (issue 23 part 7): sheet law, span correction and the residual table of pairs
     wake_fidelity="converged")
+# registered before the reference optimum is imported: the optimum reads its safe box from the registry
+register_scenario(SCENARIO)
+from . import evaluation as _evaluation, metrics as _metrics, optimum as _optimum  # noqa: E402
 
 # The saving paid up to 0.8 and a box step of 4 per decision outside the box (issue 16: uncapped and 10; issue 24,
 # on the lattice: a cap of 0.5 against the band where the nseg-10 lattice read up to ~1.0). On the converged wake
@@ -82,8 +85,8 @@ WAKE_SURFING_RANDOMISATION = Randomisation(turbulence_sigma_mps=0.25, crosswind_
 # calm air and twice it at the ends) and a 1 m start jitter
 WAKE_SURFING_TRAINING_RANDOMISATION = dataclasses.replace(WAKE_SURFING_RANDOMISATION, turbulence_sigma_mps=0.5,
                                                           turbulence_sigma_spread=1.0, initial_offset_m=1.0)
-#: the controllers the task is judged against (agents/ and train/ build them by these names); the oracle
-#: set-point ceilings (train.evaluation.wake_surfing_rollout.oracle_policy) are reported beside them, not as baselines
+#: the controllers the task is judged against (its evaluation hooks build them: .evaluation, .controllers); the
+#: oracle ceilings (.controllers) are reported beside them, not as baselines
 BASELINES = ("pid", "pid_formation", "extremum_seeking")
 
 _EVAL_PRESET = {"compute_benefit": True, "reward": WAKE_SURFING_REWARD, "randomisation": WAKE_SURFING_RANDOMISATION}
@@ -93,8 +96,7 @@ TASK = register_task(Task(
              "randomisation": WAKE_SURFING_TRAINING_RANDOMISATION},
     evaluation=EvaluationProtocol(levels=(0.0, 0.25, 1.0), headline_level=0.25, metric="harvest_ratio",
                                   preset=_EVAL_PRESET),
-    baselines=BASELINES, reference="formation_env.tasks.wake_surfing.optimum",
-    metrics="formation_env.tasks.wake_surfing.metrics",
+    baselines=BASELINES, reference=_optimum, metrics=_metrics.METRICS, evaluator=_evaluation.EVALUATION,
     description="move within the safe box to the position of least induced drag"))
 
 
@@ -118,6 +120,5 @@ RANDOM_LEADER_TASK = register_task(Task(
     options={**TASK.options,
              "randomisation": dataclasses.replace(WAKE_SURFING_TRAINING_RANDOMISATION, **_LEADER_DRAWS)},
     evaluation=dataclasses.replace(TASK.evaluation, preset={**_EVAL_PRESET, "randomisation": RANDOM_LEADER_RANDOMISATION}),
-    baselines=BASELINES, reference="formation_env.tasks.wake_surfing.optimum",
-    metrics="formation_env.tasks.wake_surfing.metrics",
+    baselines=BASELINES, reference=_optimum, metrics=_metrics.METRICS, evaluator=_evaluation.EVALUATION,
     description="wake surfing behind a leader whose weight and speed are drawn per episode: find the wake"))

@@ -42,19 +42,11 @@ from ...frames import ned_to_track_frame
 from ...rollout import Recorder, RolloutResult
 from ...scenarios import AEROSONDE_SPAN_M
 from ...sim.energy import ENERGY_COLUMNS
+from ..evaluation import longest_run
 
-__all__ = ["WakeSurfingRecorder", "episode_metrics", "longest_run", "WINDOW_S"]
+__all__ = ["WakeSurfingRecorder", "WakeSurfingMetrics", "METRICS", "episode_metrics", "longest_run", "WINDOW_S"]
 
 WINDOW_S = 1.0  # the saving is averaged over this before the 80 % test
-
-
-def longest_run(flags: np.ndarray) -> int:
-    """Length of the longest run of True in a 1-D bool array."""
-    best = run = 0
-    for f in flags:
-        run = run + 1 if f else 0
-        best = max(best, run)
-    return best
 
 
 class WakeSurfingRecorder(Recorder):
@@ -139,3 +131,20 @@ def episode_metrics(rec: WakeSurfingRecorder, result: RolloutResult, keep_series
                            "reference_vertical_b": np.asarray(ref["z_b"]).tolist()}
         out.append(m)
     return out
+
+
+class WakeSurfingMetrics:
+    """The task's metrics as :attr:`formation_env.tasks.Task.metrics` holds them: ``recorder()``, then
+    ``episodes(recorder, result)`` (:func:`episode_metrics`)."""
+
+    def recorder(self) -> WakeSurfingRecorder:
+        return WakeSurfingRecorder()
+
+    def episodes(self, recorder: WakeSurfingRecorder, result: RolloutResult, keep_series: bool = False) -> list[dict]:
+        return episode_metrics(recorder, result, keep_series=keep_series)
+
+    def __repr__(self) -> str:
+        return "WakeSurfingMetrics()"
+
+
+METRICS = WakeSurfingMetrics()

@@ -41,13 +41,12 @@ Assumptions: a steady, uniform wind (turbulence is ignored), both aircraft in st
 the trim attitude (the leader's turn and speed change enter only through its track and airspeed at
 each instant; the bank in a turn and the curved wake are ignored), the ELL model's saving at 25 m/s.
 
-``python -m formation_env.tasks.wake_surfing.optimum`` rewrites the cache
+``formation-env data optimum wake_surfing`` rewrites the cache
 (``formation_env/data/wake_surfing_optimum.json``).
 """
 
 from __future__ import annotations
 
-import argparse
 import json
 import math
 from functools import lru_cache
@@ -62,7 +61,7 @@ from ..close_formation.optimum import NOMINAL_FUEL_KG, TASK_WAKE, slot_savings
 
 __all__ = ["SAFE_BOX_B", "X_B", "CRAB_MAX_DEG", "CACHE_PATH", "crab_angle_rad", "rotate_track_to_heading",
            "saving_in_crosswind", "optimum_in_box", "build_cache", "write_cache", "load_cache",
-           "reference_optimum", "episode_reference", "optimum_saving", "leader_factor", "main"]
+           "reference_optimum", "episode_reference", "optimum_saving", "leader_factor"]
 
 SAFE_BOX_B = get_scenario("wake_surfing").safe_box_b  # ((x_lo, x_hi), (y_lo, y_hi), (z_lo, z_hi)) spans
 X_B = -2.0  # the follower's along-track set-point, spans
@@ -313,16 +312,3 @@ def optimum_saving(cache: dict | None = None) -> float:
     if 0.0 not in grid:
         raise ValueError(f"optimum_saving: the cache's crab grid {grid[0]}..{grid[-1]} deg has no 0 deg entry")
     return float(t["optimum"]["saving"][grid.index(0.0)])
-
-
-def main(argv=None) -> int:
-    """``python -m formation_env.tasks.wake_surfing.optimum [--cache PATH]``: rewrite the cache."""
-    p = argparse.ArgumentParser(description="Rewrite the cached wake-surfing optimum table.")
-    p.add_argument("--cache", default=str(CACHE_PATH))
-    a = p.parse_args(argv)
-    print(f"wrote {write_cache(a.cache, overwrite=True)}")
-    return 0
-
-
-if __name__ == "__main__":
-    raise SystemExit(main())

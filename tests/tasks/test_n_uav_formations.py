@@ -7,13 +7,13 @@ import numpy as np
 import pytest
 
 import formation_env
-from formation_env.envs.config import EnvConfig, Randomisation
+from formation_env.sim.config import EnvConfig, Randomisation
 from formation_env.scenarios import get_scenario
 from formation_env.sim import Simulation
 from formation_env.sim.observe import observation_size
 from formation_env.tasks import get_task
 from formation_env.tasks.close_formation import optimum as two_ship
-from formation_env.tasks.close_formations import optimum as opt
+from formation_env.tasks.n_uav_formations import optimum as opt
 
 NAMES = ("echelon3", "vee5", "vee9")
 

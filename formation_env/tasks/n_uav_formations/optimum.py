@@ -22,13 +22,12 @@ Objective: the formation's induced-drag saving, ``1 - sum_i D_i(formation) / sum
 UAVs' own savings. A grid over uniform steps (every rank the same) starts a bounded L-BFGS-B over all ranks'
 steps.
 
-``python -m formation_env.tasks.close_formations.optimum`` rewrites the cache
+``formation-env data optimum n_uav_formations`` rewrites the cache
 (``formation_env/data/close_formations_optimum.json``) the tasks read.
 """
 
 from __future__ import annotations
 
-import argparse
 import dataclasses
 import json
 from dataclasses import dataclass
@@ -202,7 +201,7 @@ def build_cache(slot_decimals: int = 2, **model_kw) -> dict:
     """Every formation's joint optimum, its slots rounded to ``slot_decimals`` spans (the scenarios') and the
     savings at the rounded slots (what the tasks are judged against)."""
     wake = model_kw.get("wake", TASK_WAKE)
-    out = {"_about": "Joint induced-drag optima of the N-UAV close formations (formation_env.tasks.close_formations."
+    out = {"_about": "Joint induced-drag optima of the N-UAV close formations (formation_env.tasks.n_uav_formations."
                      "optimum): offsets in spans from the leader, its track frame (x forward, y starboard, z down); "
                      "savings 1 - D_i(formation) / D_i(alone) from the ELL, every UAV at the trim.",
            "parameters": {"x_step_b": DEFAULT_X_B, "dy_range_b": list(DY_RANGE_B), "dz_range_b": list(DZ_RANGE_B),
@@ -241,17 +240,5 @@ def optimum(name: str, cache: dict | None = None) -> dict:
     """Formation ``name``'s cached entry: ``slots_b`` (F, 3), ``slot_savings`` (the leader first), ..."""
     c = load_cache() if cache is None else cache
     if name not in c["formations"]:
-        raise ValueError(f"close_formations: no cached optimum for {name!r}; available: {list(c['formations'])}")
+        raise ValueError(f"n_uav_formations: no cached optimum for {name!r}; available: {list(c['formations'])}")
     return c["formations"][name]
-
-
-def main(argv=None) -> int:
-    p = argparse.ArgumentParser(description="Rewrite the cached joint optima of the N-UAV close formations.")
-    p.add_argument("--cache", default=str(CACHE_PATH))
-    a = p.parse_args(argv)
-    print(f"wrote {write_cache(a.cache)}")
-    return 0
-
-
-if __name__ == "__main__":
-    raise SystemExit(main())

@@ -1,30 +1,25 @@
-"""Wake-surfing episodes: every controller flies the same held-out episodes (one batch, formation f is
-the episode of ``seeds[f]``) on the batched rollout (:func:`formation_env.rollout.rollout`), and each episode
-is measured against its reference optimum by the task's own metrics
-(:mod:`formation_env.tasks.wake_surfing.metrics`, whose table lists them).
+"""The wake-surfing task's controllers besides the learned policies: the thesis PID and ``pid_formation`` at the
+nominal slot, the extremum seeker, and the oracle ceilings told the reference optimum (knowledge no agent has).
 
-A controller is a :class:`formation_env.rollout.Policy` (``reset(n_rows)``, ``act(obs) -> actions``) with a
-``name``; the extremum seeker and the oracle also ``observe`` the step output (the measured saving of the
-previous decision; the oracle: the episode's steady wind and the leader's demanded track). The RL policies
-and the PIDs use the observation alone.
+Each is a :class:`formation_env.rollout.Policy` with a ``name``; the extremum seeker and the oracles also
+``observe`` the step output (the measured saving of the previous decision; the oracle: the episode's steady wind
+and the leader's demanded track). The agents they are built from come in an
+:class:`~formation_env.tasks.evaluation.AgentKit` (``kit``): ``formation_env`` never imports ``agents``.
 """
 
 from __future__ import annotations
 
-from collections.abc import Sequence
-
 import numpy as np
 
-from formation_env.rollout import FunctionPolicy, ZeroPolicy
+from ...rollout import ZeroPolicy
+from ...scenarios import AEROSONDE_SPAN_M, get_scenario
+from ...sim.params import safe_box_offsets, setpoint_ranges, setpoint_speed_range
 
-__all__ = ["fly", "pid_surfer", "pid_formation_surfer", "es_surfer", "oracle_surfer", "oracle_keeper", "sb3_surfer",
-           "OracleSetpoint", "OracleKeeper"]
+__all__ = ["pid_surfer", "pid_formation_surfer", "es_surfer", "oracle_surfer", "oracle_keeper", "OracleSetpoint",
+           "OracleKeeper"]
 
 
 def _ranges():
-    from formation_env.scenarios import get_scenario
-    from formation_env.sim.params import setpoint_ranges, setpoint_speed_range
-
     sc = get_scenario("wake_surfing")
     low, high = setpoint_ranges(sc)
     return low, high, setpoint_speed_range(sc)
@@ -43,15 +38,11 @@ class _BoxedPIDFormation:
 
     name = "pid_formation"
 
-    def __init__(self) -> None:
-        from agents.pid_formation import PIDFormation
-        from formation_env.scenarios import get_scenario
-        from formation_env.sim.params import safe_box_offsets
-
+    def __init__(self, kit) -> None:
         low, high, speed = _ranges()
         self.box_low, self.box_high = safe_box_offsets(get_scenario("wake_surfing"))
         # the agent maps its offsets onto the box (its action +-1: the walls, and its integrators stop there), as it did
-        self.agent = PIDFormation(setpoint_low_m=self.box_low, setpoint_high_m=self.box_high, speed_range_mps=speed)
+        self.agent = kit.pid_formation(setpoint_low_m=self.box_low, setpoint_high_m=self.box_high, speed_range_mps=speed)
         self.low, self.high = low, high
 
     def reset(self, n_rows: int) -> None:
@@ -68,22 +59,18 @@ class _BoxedPIDFormation:
         return np.clip(a, -1.0, 1.0).astype(np.float32)
 
 
-def pid_formation_surfer():
+def pid_formation_surfer(kit):
     """``pid_formation`` at the nominal slot, its set-point offsets held inside the safe box."""
-    return _BoxedPIDFormation()
+    return _BoxedPIDFormation(kit)
 
 
-def es_surfer(gains=None, name: str = "extremum_seeking", inner: str | None = None):
+def es_surfer(kit, gains=None, name: str = "extremum_seeking", inner: str | None = None):
     """The extremum seeker (agents/extremum_seeking.py) on the wake-surfing box; ``inner`` what flies its set-point
     (None: the seeker's default, the baseline's)."""
-    from agents.extremum_seeking import ExtremumSeeking
-    from formation_env.scenarios import get_scenario
-    from formation_env.sim.params import safe_box_offsets
-
     low, high, speed = _ranges()
     box_low, box_high = safe_box_offsets(get_scenario("wake_surfing"))
     kw = {} if inner is None else {"inner": inner}
-    agent = ExtremumSeeking(low, high, speed, gains=gains, box_low_m=box_low, box_high_m=box_high, **kw)
+    agent = kit.extremum_seeking(low, high, speed, gains=gains, box_low_m=box_low, box_high_m=box_high, **kw)
     agent.name = name
     return agent
 
@@ -94,13 +81,11 @@ class OracleSetpoint:
     ``margin_b`` spans below the reference optimum, with ``pid_formation``'s speed channel holding the
     along-track station. What the set-point interface can achieve under the episode's turbulence."""
 
-    def __init__(self, margin_b: float, name: str | None = None) -> None:
-        from agents.pid_formation import PIDFormation
-
+    def __init__(self, kit, margin_b: float, name: str | None = None) -> None:
         low, high, speed = _ranges()
         self.margin_b = float(margin_b)
         self.name = name or f"oracle_setpoint_margin{margin_b:g}"
-        self.along = PIDFormation(setpoint_low_m=low, setpoint_high_m=high, speed_range_mps=speed)
+        self.along = kit.pid_formation(setpoint_low_m=low, setpoint_high_m=high, speed_range_mps=speed)
         self._decision = None
 
     def reset(self, n_rows: int) -> None:
@@ -112,8 +97,7 @@ class OracleSetpoint:
     def _target_offset_m(self, n: int) -> np.ndarray:
         """(n, 2): the target's starboard and down offsets from the nominal slot, m (the reference optimum of
         the true steady wind and the leader's demanded track and air speed, ``margin_b`` below it)."""
-        from formation_env.scenarios import AEROSONDE_SPAN_M
-        from formation_env.tasks.wake_surfing.optimum import crab_angle_rad, reference_optimum
+        from .optimum import crab_angle_rad, reference_optimum
 
         d = self._decision
         if d is None:
@@ -132,8 +116,8 @@ class OracleSetpoint:
         return self.along.hold_actions(self._target_offset_m(obs.shape[0]), obs)
 
 
-def oracle_surfer(margin_b: float, name: str | None = None) -> OracleSetpoint:
-    return OracleSetpoint(margin_b, name)
+def oracle_surfer(kit, margin_b: float, name: str | None = None) -> OracleSetpoint:
+    return OracleSetpoint(kit, margin_b, name)
 
 
 class OracleKeeper(OracleSetpoint):
@@ -144,13 +128,11 @@ class OracleKeeper(OracleSetpoint):
     target (its set-point offsets then shifted back by it), and its offsets pass through the box's set-point map,
     which cannot command a set-point outside the box. Not a controller: it is told the optimum."""
 
-    def __init__(self, margin_b: float, name: str | None = None) -> None:
-        from agents.station_keeper import StationKeeper, StationKeeperGains
-
-        super().__init__(margin_b, name or f"oracle_keeper_margin{margin_b:g}")
+    def __init__(self, kit, margin_b: float, name: str | None = None) -> None:
+        super().__init__(kit, margin_b, name or f"oracle_keeper_margin{margin_b:g}")
         # the keeper's own gains: wake_surfing's optimum is on the converged wake's plane, as close_formation's slot,
         # where the tip vortex's steady sidewash needs the lateral integral (agents/station_keeper.py)
-        self.keeper = StationKeeper(StationKeeperGains())
+        self.keeper = kit.station_keeper(kit.station_keeper_gains())
 
     def reset(self, n_rows: int) -> None:
         super().reset(n_rows)
@@ -162,36 +144,5 @@ class OracleKeeper(OracleSetpoint):
         return self.along.hold_actions(demand, obs)
 
 
-def oracle_keeper(margin_b: float, name: str | None = None) -> OracleKeeper:
-    return OracleKeeper(margin_b, name)
-
-
-def sb3_surfer(path: str, name: str | None = None):
-    from pathlib import Path
-
-    from .safe_zip import load_sb3_model
-
-    model = load_sb3_model(path, "ppo")  # nothing in the zip unpickled
-    return FunctionPolicy(lambda obs: model.predict(obs, deterministic=True)[0], name=name or Path(path).stem)
-
-
-def fly(policy, seeds: Sequence[int], *, config=None, keep_series: bool = False,
-        crosswind_mps: float | None = None) -> list[dict]:
-    """Fly ``policy`` on the wake-surfing episodes ``seeds`` (one batch) and measure each
-    (:mod:`formation_env.tasks.wake_surfing.metrics`). ``crosswind_mps`` replaces each episode's steady wind
-    by this crosswind (east, m/s: the figure's demonstration episodes; a reset option)."""
-    from formation_env.rollout import rollout
-    from formation_env.sim import Simulation
-    from formation_env.tasks.wake_surfing.metrics import WakeSurfingRecorder, episode_metrics
-
-    from .episodes import eval_env_config
-
-    seeds = [int(s) for s in seeds]
-    if not seeds:
-        raise ValueError("seeds must not be empty")
-    cfg = config if config is not None else eval_env_config("wake_surfing", "setpoints")
-    sim = Simulation(cfg, batch_size=len(seeds))
-    options = None if crosswind_mps is None else {"steady_wind_ned": (0.0, float(crosswind_mps), 0.0)}
-    rec = WakeSurfingRecorder()
-    res = rollout(sim, policy, seeds, recorders=[rec], options=options)
-    return episode_metrics(rec, res, keep_series=keep_series)
+def oracle_keeper(kit, margin_b: float, name: str | None = None) -> OracleKeeper:
+    return OracleKeeper(kit, margin_b, name)
