@@ -339,12 +339,9 @@ def _module_edges() -> dict[str, dict[str, list[str]]]:
     return edges
 
 
-# Module cycles known and tolerated exactly as they stand: issue 63 (item 6) removes them inside formation_env.sim
-# and formation_env.aircraft; delete an entry with its fix. Any other cycle, or one of these grown, fails.
-KNOWN_MODULE_CYCLES = (
-    ["formation_env.sim.infos", "formation_env.sim.simulation", "formation_env.sim.warmup"],
-    ["formation_env.aircraft.eom", "formation_env.aircraft.state"],
-)
+# Module cycles known and tolerated exactly as they stand (each entry a sorted cycle; delete an entry with its fix).
+# Any other cycle, or one of these grown, fails.
+KNOWN_MODULE_CYCLES: tuple[list[str], ...] = ()
 
 
 def test_no_cycle_between_modules():

@@ -2,8 +2,8 @@
 
 Public API (everything batched over a leading axis of B aircraft):
 
-* :mod:`.state`: state layout (B, 16), :func:`make_state`, :func:`euler_angles`.
-* :mod:`.eom`: :func:`step` (RK4), :func:`derivatives`, :func:`outputs`, :class:`ModelOptions`.
+* :mod:`.state`: state layout (B, 16), :func:`euler_angles`.
+* :mod:`.eom`: :func:`make_state`, :func:`step` (RK4), :func:`derivatives`, :func:`outputs`, :class:`ModelOptions`.
 * :mod:`.trim`: :func:`trim` -> :class:`TrimResult`.
 * :mod:`.linearise`: :func:`linearise`, :func:`open_loop_modes`.
 * :mod:`.envelope`: :func:`check_envelope`, :class:`EnvelopeLimits`, :class:`Status`.
@@ -12,9 +12,9 @@ Public API (everything batched over a leading axis of B aircraft):
 """
 
 from .envelope import EnvelopeLimits, Status, check_envelope, describe_status
-from .eom import DEFAULT_OPTIONS, ModelOptions, air_data_of, derivatives, outputs, step, validate_controls
+from .eom import DEFAULT_OPTIONS, ModelOptions, air_data_of, derivatives, make_state, outputs, step, validate_controls
 from .params import AEROSONDE, AerosondeParams
-from .state import N_STATES, STATE_NAMES, euler_angles, make_state
+from .state import N_STATES, STATE_NAMES, euler_angles
 from .trim import TrimResult, trim, trim_state_and_controls
 
 __all__ = [

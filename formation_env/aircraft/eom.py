@@ -13,19 +13,19 @@ from functools import lru_cache
 
 import numpy as np
 
+from .. import frames
 from ..atmosphere.gravity import gravity_wgs84
 from ..atmosphere.standard import standard_atmosphere
 from ..atmosphere.wind import WindInput
 from .aerodynamics import aero_coefficients, aero_forces_moments, air_data
 from .mass import mass_properties
 from .params import AEROSONDE, AerosondeParams
-from .state import POS
 from .propulsion import engine, propeller
-from .state import FUEL, N_INTEGRATED, N_STATES, OMEGA, QUAT, as_state
+from .state import ALPHA_PREV, FUEL, N_INTEGRATED, N_STATES, OMEGA, POS, QUAT, RATES, VEL, as_state
 
 __all__ = [
     "ModelOptions", "DEFAULT_OPTIONS", "derivatives", "step", "validate_controls",
-    "air_data_of", "outputs", "N_CONTROLS",
+    "air_data_of", "outputs", "N_CONTROLS", "make_state",
 ]
 
 N_CONTROLS = 4  # elevator, aileron, rudder, throttle; a 5th column is the flap
@@ -131,6 +131,38 @@ def air_data_of(state, wind: WindInput | None = None, params: AerosondeParams = 
     va_raw, alpha_raw, beta_raw, va, alpha, beta = air_data(_relative_velocity(s, R, w), params)
     return {"airspeed_raw": va_raw, "alpha_raw": alpha_raw, "beta_raw": beta_raw,
             "airspeed": va, "alpha": alpha, "beta": beta}
+
+
+def _broadcast(x, n: int, width: int | None, name: str) -> np.ndarray:
+    arr = np.asarray(x, dtype=float)
+    shape = (n,) if width is None else (n, width)
+    try:
+        return np.broadcast_to(arr, shape)
+    except ValueError:
+        raise ValueError(f"make_state: {name} cannot be broadcast to {shape}, got {arr.shape}") from None
+
+
+def make_state(velocity_body, rates_body=(0.0, 0.0, 0.0), euler_rad=(0.0, 0.0, 0.0),
+               position_ned=(0.0, 0.0, -1000.0), fuel_kg=2.0, omega_rad_s=5000 * np.pi / 30,
+               wind=None, batch_size: int | None = None) -> np.ndarray:
+    """Build a (B, N_STATES) state (the layout of :mod:`formation_env.aircraft.state`). Vectors are (3,) or (B, 3);
+    scalars or (B,).
+
+    ``wind`` (a :class:`~formation_env.atmosphere.WindInput`) is used only to initialise the
+    alpha-dot memory so that alpha-dot is 0 on the first step, as AeroSim's Derivative block is.
+    """
+    cands = [np.asarray(v) for v in (velocity_body, rates_body, euler_rad, position_ned)]
+    n = batch_size or max([c.shape[0] if c.ndim == 2 else 1 for c in cands]
+                          + [np.size(fuel_kg), np.size(omega_rad_s)])
+    s = np.zeros((n, N_STATES))
+    s[:, VEL] = _broadcast(velocity_body, n, 3, "velocity_body")
+    s[:, RATES] = _broadcast(rates_body, n, 3, "rates_body")
+    s[:, QUAT] = frames.quaternion_from_euler(_broadcast(euler_rad, n, 3, "euler_rad"))
+    s[:, POS] = _broadcast(position_ned, n, 3, "position_ned")
+    s[:, FUEL] = _broadcast(fuel_kg, n, None, "fuel_kg")
+    s[:, OMEGA] = _broadcast(omega_rad_s, n, None, "omega_rad_s")
+    s[:, ALPHA_PREV] = air_data_of(s, wind)["alpha_raw"]
+    return s
 
 
 def derivatives(x, controls, wind: WindInput | None, alphadot, params: AerosondeParams = AEROSONDE,
@@ -301,8 +333,6 @@ def outputs(state, controls, wind: WindInput | None = None, params: AerosondePar
 
     A diagnostic, not part of the integration; ``alphadot`` defaults to 0.
     """
-    from .. import frames
-
     s = as_state(state)
     n = s.shape[0]
     u = validate_controls(controls, n)

@@ -17,9 +17,8 @@ import numpy as np
 from scipy.optimize import root
 
 from .. import frames
-from .eom import DEFAULT_OPTIONS, ModelOptions, derivatives, outputs
+from .eom import DEFAULT_OPTIONS, ModelOptions, derivatives, make_state, outputs
 from .params import AEROSONDE, AerosondeParams
-from .state import make_state
 
 __all__ = ["TrimResult", "trim", "trim_state_and_controls"]
 

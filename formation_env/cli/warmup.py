@@ -13,6 +13,7 @@ def register(sub) -> None:
 
 
 def run(args) -> int:
+    from ..sim import Simulation
     from ..sim.warmup import is_warm, warm_up
 
     if is_warm() and not args.force:
@@ -21,7 +22,7 @@ def run(args) -> int:
     print("formation-env: compiling the simulation kernels (minutes on 2 cores, longer when other processes share "
           "them; cached afterwards):",
           file=sys.stderr, flush=True)
-    total = warm_up(sys.stderr)
+    total = warm_up(Simulation, sys.stderr)
     print(f"formation-env: kernels ready in {total:.0f} s", file=sys.stderr)
     return 0
 

@@ -69,7 +69,7 @@ def energy_account_one(wake, wake_alone, coupling, ac, x, cmd, ambient, ambient_
     pos, euler = np.empty((nv, 3)), np.empty((nv, 3))
     speed, alpha, beta = np.empty(nv), np.empty(nv), np.empty(nv)
     ell_inputs(x, ambient, wake.wing_origin_body, pos, euler, speed, alpha, beta)
-    n = wake.panel_left_knot.shape[0]
+    n = wake.n_panels
     gamma = np.empty(n)
     wind_ned, wind_b, omega_b, omega_ned = np.empty((nv, 3)), np.empty((nv, 3)), np.empty((nv, 3)), np.empty((nv, 3))
     keep = np.empty((n, n + 1))  # the solve's AIC before elimination: the UAVs' lone AICs are its diagonal blocks

@@ -139,7 +139,7 @@ def step_one(state, controls, ambient, turb, turb_omega, held_wind, held_omega, 
             alpha = np.empty(nv)
             beta = np.empty(nv)
             ell_inputs(state, ambient, wake.wing_origin_body, pos, euler, speed, alpha, beta)
-            coupled_wind(wake, coupling, pos, euler, speed, alpha, beta, gamma, np.empty((wake.panel_left_knot.shape[0], 3)),
+            coupled_wind(wake, coupling, pos, euler, speed, alpha, beta, gamma, np.empty((wake.n_panels, 3)),
                          held_wind, np.empty((nv, 3)), held_omega, np.empty((nv, 3)), keep)
             # The ELL stays bounded at any separation (the overlap core); should a solve still come
             # out non-finite (degenerate input), the formation flies without induced wind this step

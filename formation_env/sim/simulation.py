@@ -50,8 +50,7 @@ from ..wake.coupling import coupling_arrays
 from ..wake.loads import isolated_model
 from .config import EnvConfig
 from .formation import WakeConfig, resolve_fidelity, resolve_wake, wake_model_for, wake_vehicle, wing_origin_body
-from .infos import INFO_REWARD_KEYS, InfoArrays, finite_values, reward_info_key, separation_each
-from .kernels import separations_if_finite
+from .infos import INFO_REWARD_KEYS, InfoArrays, reward_info_key, separation_each
 from .layout import ObservationLayout
 from .observe import REWARD_TERMS
 from .params import (TURBULENCE_CODES, ActionParams, RewardParams, StepParams, aircraft_arrays, scenario_arrays,
@@ -109,7 +108,7 @@ class Simulation:
                  wake_config: WakeConfig | None = None) -> None:
         if not isinstance(config, EnvConfig):
             raise ValueError(f"Simulation: config must be an EnvConfig, got {type(config).__name__}")
-        ensure_warm()  # a cold kernel cache compiles here, with progress on stderr, not silently in the first step
+        ensure_warm(Simulation)  # a cold kernel cache compiles here, with progress on stderr, not in the first step
         if isinstance(batch_size, (bool, np.bool_)) or not isinstance(batch_size, (int, np.integer)) or batch_size < 1:
             raise ValueError(f"batch_size must be an integer >= 1, got {batch_size!r}")
         self.config = config
@@ -393,60 +392,11 @@ class Simulation:
         o = self.output
         return SimOutput(o.observation, o.reward, o.terminated, o.truncated, self.info)
 
-    # ------------------------------------------------------------------ per-formation infos
+    # ------------------------------------------------------------------ infos (read by InfoArrays alone)
     def infos(self, i: int) -> list[dict]:
-        """Per-vehicle info dicts of formation ``i`` (the adapters' infos).
-
-        Flat: every value is a Python scalar or a numpy array, and the keys are the same at reset and
-        after every step (TorchRL builds its info specs from the reset infos). The reward's terms are
-        ``reward_<term>`` (:data:`INFO_REWARD_KEYS`; 0.0 at reset)."""
-        s, out = self.state, self.output
-        x = s.aircraft[i]
-        nv = self.n_vehicles
-        err_vec = x[:, POS] - s.position_demand[i]
-        # a formation whose state is finite has finite infos (they derive from it): checked once, in the same
-        # compiled call as the distances (for finite states bit for bit separation_each's, tested, at ~1/20 the cost)
-        separation = np.empty(nv)
-        clean = separations_if_finite(x, separation)
-        if not clean:
-            separation = separation_each(x, out.separation_m[i])
-        t = float(int(s.step[i]) * self.dt)  # the same float as float(step * dt) (steps < 2**53 convert exactly)
-        # scalars through tolist(): the same Python floats, ints and bools as float()/int()/bool() per element
-        slot, sep, fuel = out.slot_error_m[i].tolist(), separation.tolist(), x[:, 13].tolist()
-        status, crashed, box = s.status[i].tolist(), out.crashed[i].tolist(), out.box_depth_m[i].tolist()
-        terms, reward, collided = out.reward_terms[i].tolist(), out.reward[i].tolist(), bool(out.collided[i])
-        saving = out.saving[i].tolist() if self.benefit_enabled else None
-        term_keys = INFO_REWARD_KEYS[:-1]
-        # one copy per quantity for the whole formation (each UAV's info holds a row of it): the infos never
-        # share memory with the state
-        wind, omega = s.induced_wind_ned[i].copy(), s.induced_omega_body[i].copy()
-        gust, gust_omega, command = s.gust_ned[i].copy(), s.gust_omega_body[i].copy(), s.command[i].copy()
-        result = []
-        for v in range(nv):
-            info = {
-                "time_s": t,
-                "slot_error_m": slot[v],
-                "slot_error_ned_m": err_vec[v],
-                "min_separation_m": sep[v],
-                "induced_wind_ned_mps": wind[v],
-                "induced_omega_body_rad_s": omega[v],
-                "fuel_kg": fuel[v],
-                "gust_ned_mps": gust[v],
-                "gust_omega_body_rad_s": gust_omega[v],
-                "status": status[v],  # int64 -> int
-                "collision": collided,
-                "crashed": crashed[v],  # bool
-                "command": command[v],
-            }
-            if saving is not None:
-                info["induced_drag_saving"] = saving[v]
-            info["box_depth_m"] = box[v]
-            info.update(zip(term_keys, terms[v]))
-            info[INFO_REWARD_KEYS[-1]] = reward[v]
-            if not clean:
-                finite_values(info)
-            result.append(info)
-        return result
+        """Per-vehicle info dicts of formation ``i`` (the adapters' infos): ``self.info.formation(i).per_vehicle()``
+        (:meth:`InfoArrays.per_vehicle`: flat, the same keys at reset and after every step, copies)."""
+        return self.info.formation(i).per_vehicle()
 
     # ------------------------------------------------------------------ read-only views (B, V, ...)
     @property
@@ -455,31 +405,34 @@ class Simulation:
         return self.state.aircraft
 
     @property
-    def induced(self) -> np.ndarray:
-        return self.state.induced_wind_ned
-
-    @property
-    def omega(self) -> np.ndarray:
-        return self.state.induced_omega_body
-
-    @property
-    def commands(self) -> np.ndarray:
-        return self.state.command
-
-    @property
     def position_demand(self) -> np.ndarray:
         """(B, V, 3) demanded positions at the current state and time, m NED."""
         return self.state.position_demand
 
     @property
+    def induced(self) -> np.ndarray:
+        """(B, V, 3) ELL effective induced wind, m/s NED: ``info.induced_wind_ned_mps``."""
+        return self.info.induced_wind_ned_mps
+
+    @property
+    def omega(self) -> np.ndarray:
+        """(B, V, 3) ELL effective rotational wind, rad/s body: ``info.induced_omega_body_rad_s``."""
+        return self.info.induced_omega_body_rad_s
+
+    @property
+    def commands(self) -> np.ndarray:
+        """(B, V, 4) controls of the last physics step: ``info.command``."""
+        return self.info.command
+
+    @property
     def velocity_demand(self) -> np.ndarray:
-        """(B, V, 3) demanded ground velocities, m/s NED."""
-        return self.state.velocity_demand
+        """(B, V, 3) demanded ground velocities, m/s NED: ``info.velocity_demand_ned_mps``."""
+        return self.info.velocity_demand_ned_mps
 
     @property
     def time_s(self) -> np.ndarray:
-        """(B,) episode time, s."""
-        return self.state.step * self.dt
+        """(B,) episode time, s: ``info.time_s``."""
+        return self.info.time_s
 
     def velocity_ned(self) -> np.ndarray:
         """(B, V, 3) ground velocities, m/s NED."""
@@ -494,6 +447,8 @@ class Simulation:
         return w[:, None, :] + self.state.gust_ned
 
     def reward_terms(self, index: int) -> dict[str, np.ndarray]:
-        """Formation ``index``'s last reward terms, name -> (V,)."""
-        t = self.output.reward_terms[index]
-        return {**{k: t[:, j] for j, k in enumerate(REWARD_TERMS)}, "total": self.output.reward[index]}
+        """Formation ``index``'s last reward terms, name -> (V,) (``info.formation(index)``'s ``reward_terms`` by name
+        and its ``reward`` as ``"total"``)."""
+        f = self.info.formation(index)
+        t = f.reward_terms
+        return {**{k: t[:, j] for j, k in enumerate(REWARD_TERMS)}, "total": f.reward}

@@ -431,7 +431,7 @@ def formation_benefit(p, s, b, amb, out_saving):
     pos, euler = np.empty((nv, 3)), np.empty((nv, 3))
     speed, alpha, beta = np.empty(nv), np.empty(nv), np.empty(nv)
     ell_inputs(s.aircraft[b], amb, w.wing_origin_body, pos, euler, speed, alpha, beta)
-    gamma = np.empty(w.panel_left_knot.shape[0])
+    gamma = np.empty(w.n_panels)
     evaluate_formation(w, pos, euler, speed, alpha, beta, gamma, np.empty((gamma.shape[0], 3)), np.empty((nv, 3)),
                        np.empty((nv, 3)), np.empty((nv, 3)), np.empty((nv, 3)))
     induced_drag_saving_one(w, p.wake_alone, pos, euler, speed, alpha, beta, gamma, out_saving)

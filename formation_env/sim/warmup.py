@@ -9,6 +9,9 @@ after a complete warm-up of the current sources, is missing or older than a sour
 says so on stderr and compiles stage by stage, naming each stage and how far it is.
 
 ``FORMATION_ENV_NO_WARMUP=1`` turns the automatic warm-up off (the kernels then compile on first use, silently).
+
+The decision step compiles by flying simulations: the Simulation class comes as an argument (from the Simulation
+being built, or from the command), so that this module, which the simulation imports, does not import it.
 """
 
 from __future__ import annotations
@@ -41,13 +44,13 @@ def is_warm() -> bool:
         return False
 
 
-def _aircraft() -> None:
+def _aircraft(simulation) -> None:
     from ..aircraft import trim
 
     trim(25.0, 1000.0)
 
 
-def _wake() -> None:
+def _wake(simulation) -> None:
     from ..geometry import aerosonde
     from ..wake import FormationState, WakeModel, formation_benefit
 
@@ -58,29 +61,28 @@ def _wake() -> None:
     formation_benefit(model, st)
 
 
-def _decision_step() -> None:
+def _decision_step(simulation) -> None:
     import numpy as np
 
     from .config import EnvConfig, Randomisation
-    from .simulation import Simulation
 
     # one configuration exercises every branch type of the step (turbulence, benefit, set-points, a formation)
     cfg = EnvConfig(scenario="formation_keeping", action_mode="setpoints", compute_benefit=True, duration_s=0.2,
                     randomisation=Randomisation(turbulence_sigma_mps=1.0))
-    sim = Simulation(cfg, batch_size=2)
+    sim = simulation(cfg, batch_size=2)
     sim.reset(seeds=[0, 1])
     sim.step(np.zeros((2, sim.n_agents, 4)))
     # an energy task: the load-weighted coupling and the energy account of its infos (issue 23)
-    energy = Simulation(EnvConfig(scenario="close_formation", compute_benefit=True, duration_s=0.2), batch_size=1)
+    energy = simulation(EnvConfig(scenario="close_formation", compute_benefit=True, duration_s=0.2), batch_size=1)
     energy.reset(seeds=[0])
     energy.step(np.zeros((1, energy.n_agents, 4)))
     energy.info.energy_account  # noqa: B018  (computed when read: compiles the energy kernels)
-    solo = Simulation(EnvConfig(scenario="tracking", duration_s=0.2), batch_size=1)
+    solo = simulation(EnvConfig(scenario="tracking", duration_s=0.2), batch_size=1)
     solo.reset(seeds=[0])
     solo.step(np.zeros((1, solo.n_agents, 4)))
 
 
-def _control() -> None:
+def _control(simulation) -> None:
     import numpy as np
 
     from ..aircraft import trim
@@ -95,7 +97,7 @@ def _control() -> None:
     fcs.act(obs, fcs.initial_state(1))
 
 
-#: (what compiles, function): in the order the first run needs them
+#: (what compiles, function of the Simulation class): in the order the first run needs them
 STAGES = (("Aerosonde aerodynamics, propulsion and trim", _aircraft),
           ("ELL wake solve and loads", _wake),
           ("the batched decision step (guidance, PID, wake, RK4, turbulence, reward, observation)", _decision_step),
@@ -129,9 +131,10 @@ class _Heartbeat:
             self._thread.join()
 
 
-def warm_up(stream=sys.stderr) -> float:
+def warm_up(simulation, stream=sys.stderr) -> float:
     """Compile (or load from the cache) every kernel, reporting each stage on ``stream`` (None: silent); writes
-    the stamp :func:`is_warm` reads. Returns the seconds it took."""
+    the stamp :func:`is_warm` reads. ``simulation``: the :class:`~formation_env.sim.Simulation` class the decision
+    step's stage flies. Returns the seconds it took."""
     global _BUSY
     t0 = time.perf_counter()
     _BUSY = True
@@ -141,7 +144,7 @@ def warm_up(stream=sys.stderr) -> float:
             if stream is not None:
                 print(f"  [{k}/{len(STAGES)}] compiling {what} ...", file=stream, flush=True)
             with _Heartbeat(stream, k, len(STAGES)):
-                fn()
+                fn(simulation)
             if stream is not None:
                 print(f"  [{k}/{len(STAGES)}] done in {time.perf_counter() - t:.1f} s", file=stream, flush=True)
     finally:
@@ -154,9 +157,9 @@ def warm_up(stream=sys.stderr) -> float:
     return time.perf_counter() - t0
 
 
-def ensure_warm(stream=sys.stderr) -> None:
-    """Warm up (with progress on ``stream``) when the cache is cold; a no-op when warm, during a warm-up, or with
-    ``FORMATION_ENV_NO_WARMUP=1``."""
+def ensure_warm(simulation, stream=sys.stderr) -> None:
+    """Warm up (:func:`warm_up` with the Simulation class ``simulation``; progress on ``stream``) when the cache
+    is cold; a no-op when warm, during a warm-up, or with ``FORMATION_ENV_NO_WARMUP=1``."""
     global _WARM
     if _WARM or _BUSY or os.environ.get("FORMATION_ENV_NO_WARMUP") == "1":
         return
@@ -166,7 +169,7 @@ def ensure_warm(stream=sys.stderr) -> None:
     if stream is not None:
         print("formation-env: compiling the simulation kernels (first run after an install or a source change; "
               "cached afterwards; `formation-env warmup` does it ahead of time):", file=stream, flush=True)
-    total = warm_up(stream)
+    total = warm_up(simulation, stream)
     _WARM = True
     if stream is not None:
         print(f"formation-env: kernels ready in {total:.0f} s", file=stream, flush=True)

@@ -27,8 +27,7 @@ def lu_solve_inplace(a, rhs, row=None):
     Each elimination step copies the pivot row's remaining part into ``row`` (scratch of n floats; None:
     allocated here) before updating the rows below it: the update loop then reads one array and writes
     another, which LLVM vectorises (without the copy it must assume the two rows alias). Every element
-    gets the same operations in the same order, so the result is bit for bit the plain loop's; 2x faster
-    at n = 50 and 90, 1.4x at 20 (issue 26, runs/ note)."""
+    gets the same operations in the same order, so the result is bit for bit the plain loop's."""
     n = a.shape[0]
     if row is None:
         row = np.empty(n)
@@ -105,36 +104,26 @@ def static_aic(knot_x1_b, knot_x3_b, knot_vehicle, knot_surface, surface_knot_st
 
 
 @_jit
-def assemble_and_solve(
-    x1, x3, bound_dir, chord_dir, trail, vel, rot, pos, origin, airspeed,
-    knot_vehicle, knot_surface, surface_knot_start, surface_core_scale, panel_left_knot, panel_vehicle,
-    control_b, normal_b, aic_static, cutoff, aic_core_mode, nu, overlap_core, aic, gamma, r1, inv1, r3, inv3,
-    vcross, sheet=None, keep=None,
-):
+def assemble_and_solve(lat, posed, aic, gamma, vcross, sheet=None, keep=None):
     """Build the AIC over every panel of every vehicle and solve for the circulations (4.25-4.69): the laws and
     arguments of :func:`assemble_and_solve_scalar`, with the knots of each control point evaluated as vector lanes
     (:func:`assemble_lanes`, :mod:`.lanes`; bit for bit the same AIC, circulation and ``vcross``) when the lattice
     has at most :data:`formation_env.wake.lanes.KMAX` knots, else the scalar assembly."""
-    if x1.shape[0] <= KMAX:
-        assemble_lanes(x1, x3, bound_dir, chord_dir, trail, vel, rot, pos, origin, airspeed, knot_vehicle, knot_surface,
-                       surface_knot_start, surface_core_scale, panel_left_knot, panel_vehicle, control_b, normal_b,
-                       aic_static, cutoff, aic_core_mode, nu, overlap_core, aic, gamma, vcross, sheet)
+    if posed.x1.shape[0] <= KMAX:
+        assemble_lanes(lat, posed, aic, gamma, vcross, sheet)
     else:
-        assemble_scalar(x1, x3, bound_dir, chord_dir, trail, vel, rot, pos, origin, airspeed, knot_vehicle, knot_surface,
-                        surface_knot_start, surface_core_scale, panel_left_knot, panel_vehicle, control_b, normal_b,
-                        aic_static, cutoff, aic_core_mode, nu, overlap_core, aic, gamma, r1, inv1, r3, inv3, vcross,
-                        sheet)
+        assemble_scalar(lat, posed, aic, gamma, vcross, sheet)
     _keep_and_solve(aic, gamma, keep)
 
 
 @_jit
-def assemble_and_solve_scalar(
-    x1, x3, bound_dir, chord_dir, trail, vel, rot, pos, origin, airspeed,
-    knot_vehicle, knot_surface, surface_knot_start, surface_core_scale, panel_left_knot, panel_vehicle,
-    control_b, normal_b, aic_static, cutoff, aic_core_mode, nu, overlap_core, aic, gamma, r1, inv1, r3, inv3,
-    vcross, sheet=None, keep=None,
-):
+def assemble_and_solve_scalar(lat, posed, aic, gamma, vcross, sheet=None, keep=None):
     """Build the AIC over every panel of every vehicle and solve for the circulations (4.25-4.69).
+
+    ``lat`` the body-axis lattice and the solve's settings (a :class:`~formation_env.wake.structs.LatticeArrays`:
+    its ``cutoff_m``, ``aic_core_mode``, ``kinematic_viscosity`` and ``overlap_core_m`` below), ``posed`` the
+    formation posed in NED (a :class:`~formation_env.wake.structs.PosedLattice`, whose scratch it uses); ``aic``
+    (N, N) and ``gamma`` (N,) receive the matrix and the circulation.
 
     Boundary condition (V_induced + V_inf) . n = 0 with V_inf = -V_vehicle: A G = V_vehicle . n.
     All branches use the plain Biot-Savart law with the Eq. 4.31 cutoff (the thesis), except that
@@ -159,9 +148,7 @@ def assemble_and_solve_scalar(
     formation benefit solves for the isolated circulation instead of posing and assembling the lone vehicle again
     (:func:`formation_env.wake.benefit.induced_drags_one`; issue 26).
     """
-    assemble_scalar(x1, x3, bound_dir, chord_dir, trail, vel, rot, pos, origin, airspeed, knot_vehicle, knot_surface,
-                    surface_knot_start, surface_core_scale, panel_left_knot, panel_vehicle, control_b, normal_b,
-                    aic_static, cutoff, aic_core_mode, nu, overlap_core, aic, gamma, r1, inv1, r3, inv3, vcross, sheet)
+    assemble_scalar(lat, posed, aic, gamma, vcross, sheet)
     _keep_and_solve(aic, gamma, keep)
 
 
@@ -178,15 +165,18 @@ def _keep_and_solve(aic, gamma, keep):
 
 
 @_jit
-def assemble_scalar(
-    x1, x3, bound_dir, chord_dir, trail, vel, rot, pos, origin, airspeed,
-    knot_vehicle, knot_surface, surface_knot_start, surface_core_scale, panel_left_knot, panel_vehicle,
-    control_b, normal_b, aic_static, cutoff, aic_core_mode, nu, overlap_core, aic, gamma, r1, inv1, r3, inv3,
-    vcross, sheet=None,
-):
+def assemble_scalar(lat, posed, aic, gamma, vcross, sheet=None):
     """The AIC into ``aic`` and the right-hand side into ``gamma`` (see :func:`assemble_and_solve_scalar`), branch by
     branch with the scalar laws: the reference :func:`assemble_lanes` equals bit for bit, and the path of lattices
     of more than :data:`formation_env.wake.lanes.KMAX` knots."""
+    x1, x3, bound_dir, chord_dir, trail, vel, rot, pos, origin, airspeed = (
+        posed.x1, posed.x3, posed.bound_dir, posed.chord_dir, posed.trail, posed.vel, posed.rot, posed.pos,
+        posed.origin, posed.airspeed)
+    r1, inv1, r3, inv3 = posed.r1, posed.inv1, posed.r3, posed.inv3
+    knot_vehicle, knot_surface, surface_knot_start = lat.knot_vehicle, lat.knot_surface, lat.surface_knot_start
+    surface_core_scale, panel_left_knot, panel_vehicle = lat.surface_core_scale, lat.panel_left_knot, lat.panel_vehicle
+    control_b, normal_b, aic_static = lat.control_b, lat.normal_b, lat.aic_static
+    cutoff, aic_core_mode, nu, overlap_core = lat.cutoff_m, lat.aic_core_mode, lat.kinematic_viscosity, lat.overlap_core_m
     n_panels = panel_left_knot.shape[0]
     n_knots = x1.shape[0]
     store = vcross.shape[0] > 0
@@ -255,15 +245,18 @@ def assemble_scalar(
 
 
 @_jit
-def assemble_lanes(
-    x1, x3, bound_dir, chord_dir, trail, vel, rot, pos, origin, airspeed,
-    knot_vehicle, knot_surface, surface_knot_start, surface_core_scale, panel_left_knot, panel_vehicle,
-    control_b, normal_b, aic_static, cutoff, aic_core_mode, nu, overlap_core, aic, gamma, vcross, sheet=None,
-):
+def assemble_lanes(lat, posed, aic, gamma, vcross, sheet=None):
     """:func:`assemble_scalar` with each control point's knots as vector lanes (:mod:`.lanes`: the other vehicles'
     L-lines, then their bound branches, and the own trailing legs; the lanes whose fast form is not the law's
     recomputed by the scalar laws): the same AIC, right-hand side and ``vcross``, bit for bit. At most
     :data:`~formation_env.wake.lanes.KMAX` knots; a vehicle's knots must be contiguous (the lattice's order)."""
+    x1, x3, bound_dir, chord_dir, trail, vel, rot, pos, origin, airspeed = (
+        posed.x1, posed.x3, posed.bound_dir, posed.chord_dir, posed.trail, posed.vel, posed.rot, posed.pos,
+        posed.origin, posed.airspeed)
+    knot_vehicle, knot_surface, surface_knot_start = lat.knot_vehicle, lat.knot_surface, lat.surface_knot_start
+    surface_core_scale, panel_left_knot, panel_vehicle = lat.surface_core_scale, lat.panel_left_knot, lat.panel_vehicle
+    control_b, normal_b, aic_static = lat.control_b, lat.normal_b, lat.aic_static
+    cutoff, aic_core_mode, nu, overlap_core = lat.cutoff_m, lat.aic_core_mode, lat.kinematic_viscosity, lat.overlap_core_m
     n_panels = panel_left_knot.shape[0]
     n_knots = x1.shape[0]
     store = vcross.shape[0] > 0

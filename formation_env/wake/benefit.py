@@ -67,26 +67,21 @@ def induced_drag_one(wake, gamma, pos, euler, speed, alpha, beta, out_drag, air_
     into ``out_drag`` (V,), for the circulation ``gamma`` (N,) solved at these poses
     (:func:`~formation_env.wake.kernels.evaluate_one`); equal to ``vehicle_loads(...).drag_n``."""
     nv = pos.shape[0]
-    n_panels = wake.panel_left_knot.shape[0]
-    rot, vel, trail, x1, x3, origin, bound_dir, chord_dir, r1, inv1, r3, inv3 = posed_lattice(
-        pos, euler, speed, alpha, beta, wake.knot_x1_b, wake.knot_x3_b, wake.knot_vehicle, wake.knot_surface,
-        wake.surface_origin_b, wake.surface_vehicle, wake.surface_knot_start)
-    frames = sheet_strip_frames(wake.sheet, trail, x3, wake.knot_vehicle, wake.knot_surface)
+    lat = wake.lattice
+    n_panels = lat.panel_left_knot.shape[0]
+    posed = posed_lattice(lat, pos, euler, speed, alpha, beta)
+    rot, vel, x1 = posed.rot, posed.vel, posed.x1
+    frames = sheet_strip_frames(wake.sheet, posed.trail, posed.x3, lat.knot_vehicle, lat.knot_surface)
     f = np.zeros((nv, 3))  # summed Kutta-Joukowski force per vehicle, NED
     for j in range(n_panels):
-        v = wake.panel_vehicle[j]
-        k = wake.panel_left_knot[j]
+        v = lat.panel_vehicle[j]
+        k = lat.panel_left_knot[j]
         lx, ly, lz, mx, my, mz = _bound_segment(x1, k)
         # Own horseshoes: the solve's law (plain, cutoff); the others': the field law (viscous core).
-        ox, oy, oz = field_velocity(mx, my, mz, v, True, x1, x3, bound_dir, chord_dir, trail, origin, speed, gamma,
-                                    wake.surface_knot_start, wake.surface_panel_start, wake.surface_vehicle,
-                                    wake.surface_core_scale, wake.cutoff_m, CORE_NONE, wake.kinematic_viscosity, 0.0,
-                                    r1, inv1, r3, inv3)
-        ex, ey, ez = field_velocity(mx, my, mz, v, False, x1, x3, bound_dir, chord_dir, trail, origin, speed, gamma,
-                                    wake.surface_knot_start, wake.surface_panel_start, wake.surface_vehicle,
-                                    wake.surface_core_scale, wake.cutoff_m, wake.core_mode, wake.kinematic_viscosity,
-                                    wake.overlap_core_m, r1, inv1, r3, inv3, wake.sheet,
-                                    0.0 if wake.sheet is None else np.sqrt(lx * lx + ly * ly + lz * lz), frames)
+        ox, oy, oz = field_velocity(mx, my, mz, v, True, lat, posed, gamma, CORE_NONE, 0.0)
+        ex, ey, ez = field_velocity(mx, my, mz, v, False, lat, posed, gamma, lat.core_mode, lat.overlap_core_m,
+                                    wake.sheet, 0.0 if wake.sheet is None else np.sqrt(lx * lx + ly * ly + lz * lz),
+                                    frames)
         _add_kutta_joukowski(f, v, air_density * gamma[j], vel[v, 0], vel[v, 1], vel[v, 2], ox, oy, oz, ex, ey, ez,
                              lx, ly, lz)
     for v in range(nv):
@@ -110,15 +105,10 @@ def isolated_circulation_one(wake_alone, v, pos, euler, speed, alpha, beta, gamm
     sp1[0] = speed[v]
     al1[0] = alpha[v]
     be1[0] = beta[v]
-    n = wake_alone.panel_left_knot.shape[0]
-    w = wake_alone
-    rot, vel, trail, x1, x3, origin, bound_dir, chord_dir, r1, inv1, r3, inv3 = posed_lattice(
-        pos1, eul1, sp1, al1, be1, w.knot_x1_b, w.knot_x3_b, w.knot_vehicle, w.knot_surface, w.surface_origin_b,
-        w.surface_vehicle, w.surface_knot_start)
-    assemble_and_solve(x1, x3, bound_dir, chord_dir, trail, vel, rot, pos1, origin, sp1, w.knot_vehicle,
-                       w.knot_surface, w.surface_knot_start, w.surface_core_scale, w.panel_left_knot, w.panel_vehicle, w.control_b, w.normal_b,
-                       w.aic_static, w.cutoff_m, w.aic_core_mode, w.kinematic_viscosity, w.overlap_core_m, np.empty((n, n)),
-                       gamma_out, r1, inv1, r3, inv3, np.empty((0, 0, 3)), w.sheet)
+    lat = wake_alone.lattice
+    n = lat.panel_left_knot.shape[0]
+    posed = posed_lattice(lat, pos1, eul1, sp1, al1, be1)
+    assemble_and_solve(lat, posed, np.empty((n, n)), gamma_out, np.empty((0, 0, 3)), wake_alone.sheet)
     return pos1, eul1, sp1, al1, be1
 
 
@@ -127,7 +117,7 @@ def isolated_induced_drag_one(wake_alone, v, pos, euler, speed, alpha, beta, air
     """Induced drag (N) vehicle ``v`` of the formation would have alone at its pose and air data:
     the single-vehicle lattice ``wake_alone`` solved (:func:`isolated_circulation_one`), then
     :func:`induced_drag_one`."""
-    gamma = np.empty(wake_alone.panel_left_knot.shape[0])
+    gamma = np.empty(wake_alone.n_panels)
     pos1, eul1, sp1, al1, be1 = isolated_circulation_one(wake_alone, v, pos, euler, speed, alpha, beta, gamma)
     d = np.empty(1)
     induced_drag_one(wake_alone, gamma, pos1, eul1, sp1, al1, be1, d, air_density)
@@ -135,15 +125,19 @@ def isolated_induced_drag_one(wake_alone, v, pos, euler, speed, alpha, beta, air
 
 
 @_jit
-def _own_field_pair(px, py, pz, v, x1, x3, bound_dir, chord_dir, trail, gamma, gamma2, surface_knot_start,
-                    surface_panel_start, surface_vehicle, cutoff, r1, inv1, r3, inv3):
+def _own_field_pair(px, py, pz, v, lat, posed, gamma, gamma2):
     """Velocity (NED) induced at P by vehicle ``v``'s own horseshoes for two circulations at once (the
     formation's ``gamma`` and the lone vehicle's ``gamma2``, both indexed by the formation's panels): the
     own-horseshoe part of :func:`~formation_env.wake.field.field_velocity` (``keep_only``, the solve's law:
     plain Biot-Savart with the ``cutoff``, no core), each branch evaluated once and added to both sums in
     the same order and form as there, so each sum is bit for bit what a separate call gives. The lone
     vehicle's drag needs nothing else (no other vehicle), so the saving takes it from the formation's pass
-    (issue 26: the lone vehicles' own field was half the saving's cost)."""
+    (issue 26)."""
+    x1, x3, bound_dir, chord_dir, trail = posed.x1, posed.x3, posed.bound_dir, posed.chord_dir, posed.trail
+    r1, inv1, r3, inv3 = posed.r1, posed.inv1, posed.r3, posed.inv3
+    surface_knot_start, surface_panel_start, surface_vehicle = (lat.surface_knot_start, lat.surface_panel_start,
+                                                                lat.surface_vehicle)
+    cutoff = lat.cutoff_m
     vx = 0.0
     vy = 0.0
     vz = 0.0
@@ -299,10 +293,11 @@ def induced_drags_one(wake, wake_alone, pos, euler, speed, alpha, beta, gamma_fo
     block solved, bit for bit what posing and solving it alone gives (the same entries, tested), without the posing
     and assembly (issue 26)."""
     nv = pos.shape[0]
-    n_panels = wake.panel_left_knot.shape[0]
-    n_alone = wake_alone.panel_left_knot.shape[0]
+    lat = wake.lattice
+    n_panels = lat.panel_left_knot.shape[0]
+    n_alone = wake_alone.lattice.panel_left_knot.shape[0]
     for v in range(nv):
-        if wake.vehicle_panel_start[v + 1] - wake.vehicle_panel_start[v] != n_alone:
+        if lat.vehicle_panel_start[v + 1] - lat.vehicle_panel_start[v] != n_alone:
             raise ValueError("induced_drags_one: wake_alone's panel count differs from a vehicle's of the formation "
                              "(every vehicle must be of the make-up wake_alone describes)")
     gamma_alone = np.empty(n_panels)
@@ -310,7 +305,7 @@ def induced_drags_one(wake, wake_alone, pos, euler, speed, alpha, beta, gamma_fo
     reuse = keep is not None and keep.shape[0] == n_panels
     blk = np.empty((n_alone, n_alone) if reuse else (0, 0))
     for v in range(nv):
-        p0 = wake.vehicle_panel_start[v]
+        p0 = lat.vehicle_panel_start[v]
         if reuse:
             for i in range(n_alone):
                 for c in range(n_alone):
@@ -321,43 +316,43 @@ def induced_drags_one(wake, wake_alone, pos, euler, speed, alpha, beta, gamma_fo
             isolated_circulation_one(wake_alone, v, pos, euler, speed, alpha, beta, g1)
         for i in range(n_alone):
             gamma_alone[p0 + i] = g1[i]
-    rot, vel, trail, x1, x3, origin, bound_dir, chord_dir, r1, inv1, r3, inv3 = posed_lattice(
-        pos, euler, speed, alpha, beta, wake.knot_x1_b, wake.knot_x3_b, wake.knot_vehicle, wake.knot_surface,
-        wake.surface_origin_b, wake.surface_vehicle, wake.surface_knot_start)
-    frames = sheet_strip_frames(wake.sheet, trail, x3, wake.knot_vehicle, wake.knot_surface)
+    posed = posed_lattice(lat, pos, euler, speed, alpha, beta)
+    rot, vel, trail, x1, x3 = posed.rot, posed.vel, posed.trail, posed.x1, posed.x3
+    origin, bound_dir, chord_dir = posed.origin, posed.bound_dir, posed.chord_dir
+    frames = sheet_strip_frames(wake.sheet, trail, x3, lat.knot_vehicle, lat.knot_surface)
     f = np.zeros((nv, 3))  # summed Kutta-Joukowski force per vehicle, NED: in formation
     fa = np.zeros((nv, 3))  # and alone
     n_knots = x1.shape[0]
     if n_knots <= lanes.KMAX:
         # the branches at each bound midpoint as vector lanes (issue 26; bit for bit the scalar pass below)
         s = lanes.lane_scratch()
-        lanes.load_knots(s, x1, x3, chord_dir, bound_dir, trail, wake.knot_vehicle, frames, wake.sheet)
-        vk0, vk1 = lanes.vehicle_knot_ranges(wake.knot_vehicle, nv)
-        ro2 = wake.overlap_core_m * wake.overlap_core_m if wake.overlap_core_m > 0.0 else np.inf
-        cutoff = wake.cutoff_m
+        lanes.load_knots(s, x1, x3, chord_dir, bound_dir, trail, lat.knot_vehicle, frames, wake.sheet)
+        vk0, vk1 = lanes.vehicle_knot_ranges(lat.knot_vehicle, nv)
+        ro2 = lat.overlap_core_m * lat.overlap_core_m if lat.overlap_core_m > 0.0 else np.inf
+        cutoff = lat.cutoff_m
         for j in range(n_panels):
-            v = wake.panel_vehicle[j]
-            k = wake.panel_left_knot[j]
+            v = lat.panel_vehicle[j]
+            k = lat.panel_left_knot[j]
             lx, ly, lz, mx, my, mz = _bound_segment(x1, k)
             a, b = vk0[v], vk1[v]
             lanes.own_field_lanes(s, a, b, mx, my, mz, cutoff)
             lanes.own_field_bounds(s, a, b - 1, mx, my, mz, cutoff)
-            ox, oy, oz, ax, ay, az = _own_pair_sum(s, v, gamma_formation, gamma_alone, wake.surface_vehicle,
-                                                   wake.surface_knot_start, wake.surface_panel_start)
+            ox, oy, oz, ax, ay, az = _own_pair_sum(s, v, gamma_formation, gamma_alone, lat.surface_vehicle,
+                                                   lat.surface_knot_start, lat.surface_panel_start)
             recv_w = 0.0 if wake.sheet is None else np.sqrt(lx * lx + ly * ly + lz * lz)
-            lanes.fill_core_radius(s, mx, my, mz, v, origin, speed, wake.knot_vehicle, wake.surface_knot_start,
-                                   wake.surface_core_scale, wake.core_mode, wake.kinematic_viscosity)
+            lanes.fill_core_radius(s, mx, my, mz, v, origin, speed, lat.knot_vehicle, lat.surface_knot_start,
+                                   lat.surface_core_scale, lat.core_mode, lat.kinematic_viscosity)
             for rng in range(2):
                 lo = 0 if rng == 0 else b
                 hi = a if rng == 0 else n_knots
                 lanes.other_llines(s, lo, hi, mx, my, mz, 0.0, 0.0, 0.0, cutoff, ro2, recv_w, wake.sheet is not None)
-                lanes.fix_llines(s, lo, hi, mx, my, mz, 0.0, 0.0, 0.0, x1, x3, chord_dir, trail, wake.knot_vehicle,
-                                 cutoff, wake.overlap_core_m, frames, recv_w, wake.sheet)
+                lanes.fix_llines(s, lo, hi, mx, my, mz, 0.0, 0.0, 0.0, x1, x3, chord_dir, trail, lat.knot_vehicle,
+                                 cutoff, lat.overlap_core_m, frames, recv_w, wake.sheet)
                 if hi - lo > 1:
                     lanes.other_bounds(s, lo, hi - 1, mx, my, mz, ro2)
-                    lanes.fix_bounds(s, lo, hi - 1, mx, my, mz, x1, bound_dir, cutoff, wake.overlap_core_m)
-            ex, ey, ez = _other_field_sum(s, v, gamma_formation, wake.surface_vehicle, wake.surface_knot_start,
-                                          wake.surface_panel_start)
+                    lanes.fix_bounds(s, lo, hi - 1, mx, my, mz, x1, bound_dir, cutoff, lat.overlap_core_m)
+            ex, ey, ez = _other_field_sum(s, v, gamma_formation, lat.surface_vehicle, lat.surface_knot_start,
+                                          lat.surface_panel_start)
             _add_kutta_joukowski(f, v, air_density * gamma_formation[j], vel[v, 0], vel[v, 1], vel[v, 2], ox, oy,
                                  oz, ex, ey, ez, lx, ly, lz)
             _add_kutta_joukowski(fa, v, air_density * gamma_alone[j], vel[v, 0], vel[v, 1], vel[v, 2], ax, ay, az,
@@ -367,16 +362,12 @@ def induced_drags_one(wake, wake_alone, pos, euler, speed, alpha, beta, gamma_fo
             out_alone[v] = _wind_axis_drag(rot[v], fa[v], alpha[v], beta[v])
         return
     for j in range(n_panels):
-        v = wake.panel_vehicle[j]
-        k = wake.panel_left_knot[j]
+        v = lat.panel_vehicle[j]
+        k = lat.panel_left_knot[j]
         lx, ly, lz, mx, my, mz = _bound_segment(x1, k)
-        ox, oy, oz, ax, ay, az = _own_field_pair(mx, my, mz, v, x1, x3, bound_dir, chord_dir, trail, gamma_formation,
-                                                 gamma_alone, wake.surface_knot_start, wake.surface_panel_start,
-                                                 wake.surface_vehicle, wake.cutoff_m, r1, inv1, r3, inv3)
-        ex, ey, ez = field_velocity(mx, my, mz, v, False, x1, x3, bound_dir, chord_dir, trail, origin, speed,
-                                    gamma_formation, wake.surface_knot_start, wake.surface_panel_start,
-                                    wake.surface_vehicle, wake.surface_core_scale, wake.cutoff_m, wake.core_mode,
-                                    wake.kinematic_viscosity, wake.overlap_core_m, r1, inv1, r3, inv3, wake.sheet,
+        ox, oy, oz, ax, ay, az = _own_field_pair(mx, my, mz, v, lat, posed, gamma_formation, gamma_alone)
+        ex, ey, ez = field_velocity(mx, my, mz, v, False, lat, posed, gamma_formation, lat.core_mode,
+                                    lat.overlap_core_m, wake.sheet,
                                     0.0 if wake.sheet is None else np.sqrt(lx * lx + ly * ly + lz * lz), frames)
         _add_kutta_joukowski(f, v, air_density * gamma_formation[j], vel[v, 0], vel[v, 1], vel[v, 2], ox, oy, oz,
                              ex, ey, ez, lx, ly, lz)

@@ -41,8 +41,8 @@ OVERLAP_CORE_CHORD_FRACTION = 1.0
 SHEET_BLEND_INNER = 4.0
 SHEET_BLEND_OUTER = 6.0
 # The kernels' switch for the sheet law: None (the thesis's legs) or this float. A switch by *type*: numba
-# compiles the None case without the law's code or branches (a bool switched at run time cost the thesis
-# path 8-10 %, measured).
+# compiles the None case without the law's code or branches (a bool switched at run time slows the thesis
+# path).
 SHEET_ON = 1.0
 # max over x of (1 - exp(-1.26 x^2)) / x (at x ~ 1.0): the peak of the cored law is
 # CORE_PEAK / (2 pi rc) per unit strength for a semi-infinite or a finite straight branch.
@@ -52,7 +52,7 @@ _MIN_CORE_M = 1e-9
 
 _jit = nb.njit(cache=True, fastmath=False, error_model="numpy")
 # The per-branch laws run ~2,000 times per formation solve: inlined at numba IR level (LLVM did not
-# inline the cored variants into the field and AIC loops: +30 % per solve, measured).
+# inline the cored variants into the field and AIC loops, which slowed every solve).
 _jit_inline = nb.njit(cache=True, fastmath=False, error_model="numpy", inline="always")
 
 

@@ -224,7 +224,7 @@ def coupled_wind(wake, coupling, pos, euler, speed, alpha, beta, gamma_out, vpts
         rot = np.empty((nv, 3, 3))
         for v in range(nv):
             dcm_ned_to_body_1(euler[v, 0], euler[v, 1], euler[v, 2], rot[v])
-        load_weighted_wind(rot, vpts_out, gamma_out, coupling, wake.vehicle_panel_start, wind_ned_out, wind_b_out,
+        load_weighted_wind(rot, vpts_out, gamma_out, coupling, wake.lattice.vehicle_panel_start, wind_ned_out, wind_b_out,
                            omega_b_out, omega_ned_out)
         add_wind_residual(wake, wake.residual, pos, euler, gamma_out, rot, wind_ned_out, wind_b_out, omega_b_out,
                           omega_ned_out)

@@ -9,6 +9,7 @@ import numba as nb
 from .biot_savart import (CORE_NONE, branch_cored, core_radius, leg_cored, leg_sheet, leg_sheet_framed, point_to_knots,
                           sheet_strip_frames)
 from .posing import posed_lattice
+from .structs import LatticeArrays
 
 __all__ = ["field_velocity", "field_velocity_batch"]
 
@@ -16,15 +17,13 @@ _jit = nb.njit(cache=True, fastmath=False, error_model="numpy")
 
 
 @_jit
-def field_velocity(
-    px, py, pz, vehicle_filter, keep_only,
-    x1, x3, bound_dir, chord_dir, trail, origin, airspeed, gamma,
-    surface_knot_start, surface_panel_start, surface_vehicle, surface_core_scale,
-    cutoff, core_mode, nu, overlap_core, r1, inv1, r3, inv3, sheet=None, recv_w=0.0, frames=None,
-):
+def field_velocity(px, py, pz, vehicle_filter, keep_only, lat, posed, gamma, core_mode, overlap_core, sheet=None,
+                   recv_w=0.0, frames=None):
     """Velocity induced at one field point by the horseshoes of every vehicle except
-    ``vehicle_filter`` (-1 excludes none) or, with ``keep_only``, of that vehicle alone
-    (Eqs. 4.70-4.75): bound and chordwise branches plain Biot-Savart (clipped at ``cutoff`` so
+    ``vehicle_filter`` (-1 excludes none) or, with ``keep_only``, of that vehicle alone, for the circulation
+    ``gamma`` (N,) of the lattice ``lat`` (a :class:`~formation_env.wake.structs.LatticeArrays`: its ``cutoff_m``
+    and ``kinematic_viscosity``) posed as ``posed`` (a :class:`~formation_env.wake.structs.PosedLattice`, whose
+    scratch it uses) (Eqs. 4.70-4.75): bound and chordwise branches plain Biot-Savart (clipped at ``cutoff`` so
     that overlapping vehicles stay finite), trailing legs with the viscous core of age
     tau = |P - source surface origin| / V_source (``core_mode`` 0 plain, 1 Lamb-Oseen,
     2 Kurylowich). ``overlap_core`` > 0 (m): every branch carries the overlap core of that radius
@@ -37,6 +36,12 @@ def field_velocity(
     (m; 0: at the point); passed, like ``overlap_core``, for the other vehicles' field. ``frames`` (K,
     STRIP_COLUMNS) or None: the knots' strips (:func:`~formation_env.wake.biot_savart.strip_frames` of this
     posed lattice), for a caller that evaluates many points (None: each leg computes its own; the same values)."""
+    x1, x3, bound_dir, chord_dir, trail, origin, airspeed = (posed.x1, posed.x3, posed.bound_dir, posed.chord_dir,
+                                                             posed.trail, posed.origin, posed.airspeed)
+    r1, inv1, r3, inv3 = posed.r1, posed.inv1, posed.r3, posed.inv3
+    surface_knot_start, surface_panel_start = lat.surface_knot_start, lat.surface_panel_start
+    surface_vehicle, surface_core_scale = lat.surface_vehicle, lat.surface_core_scale
+    cutoff, nu = lat.cutoff_m, lat.kinematic_viscosity
     vx = 0.0
     vy = 0.0
     vz = 0.0
@@ -86,27 +91,20 @@ def field_velocity(
 
 
 @nb.njit(cache=True, parallel=True, error_model="numpy")
-def field_velocity_batch(
-    points, vehicle_filter, keep_only, pos, euler, airspeed, alpha, beta, gamma,
-    knot_x1_b, knot_x3_b, knot_vehicle, knot_surface,
-    surface_origin_b, surface_vehicle, surface_knot_start, surface_panel_start, surface_core_scale,
-    cutoff, core_mode, nu, overlap_core, out, sheet=None, recv_w=None,
-):
-    """Induced velocity (NED) at arbitrary points (B, P, 3) for solved circulations (B, N);
-    ``vehicle_filter`` (P,), ``keep_only``, ``overlap_core`` and ``sheet`` as in :func:`field_velocity`, ``recv_w`` (P,) its receiving width
-    per point (None: 0)."""
+def field_velocity_batch(points, vehicle_filter, keep_only, lattice, pos, euler, airspeed, alpha, beta, gamma,
+                         core_mode, overlap_core, out, sheet=None, recv_w=None):
+    """Induced velocity (NED) at arbitrary points (B, P, 3) for solved circulations (B, N) of the lattice ``lattice``
+    (a :class:`~formation_env.wake.structs.LatticeArrays`, or the plain tuple of its fields) at the poses (B, V, ...);
+    ``vehicle_filter`` (P,), ``keep_only``, ``core_mode``, ``overlap_core`` and ``sheet`` as in
+    :func:`field_velocity` (they override the lattice's), ``recv_w`` (P,) its receiving width per point (None: 0)."""
+    lat = LatticeArrays(*lattice)
     for b in nb.prange(pos.shape[0]):
-        rot, vel, trail, x1, x3, origin, bound_dir, chord_dir, r1, inv1, r3, inv3 = posed_lattice(
-            pos[b], euler[b], airspeed[b], alpha[b], beta[b], knot_x1_b, knot_x3_b, knot_vehicle, knot_surface,
-            surface_origin_b, surface_vehicle, surface_knot_start)
-        frames = sheet_strip_frames(sheet, trail, x3, knot_vehicle, knot_surface)
+        posed = posed_lattice(lat, pos[b], euler[b], airspeed[b], alpha[b], beta[b])
+        frames = sheet_strip_frames(sheet, posed.trail, posed.x3, lat.knot_vehicle, lat.knot_surface)
         for p in range(points.shape[1]):
             rw = 0.0 if recv_w is None else recv_w[p]
             wx, wy, wz = field_velocity(points[b, p, 0], points[b, p, 1], points[b, p, 2], vehicle_filter[p], keep_only,
-                                        x1, x3, bound_dir, chord_dir, trail, origin, airspeed[b], gamma[b],
-                                        surface_knot_start, surface_panel_start,
-                                        surface_vehicle, surface_core_scale, cutoff, core_mode, nu, overlap_core, r1, inv1, r3,
-                                        inv3, sheet, rw, frames)
+                                        lat, posed, gamma[b], core_mode, overlap_core, sheet, rw, frames)
             out[b, p, 0] = wx
             out[b, p, 1] = wy
             out[b, p, 2] = wz

@@ -31,6 +31,7 @@ from .biot_savart import (_MIN_CORE_M, _TINY_H, CORE_KURYLOWICH, CORE_LAMB_OSEEN
                           core_radius, sheet_strip_frames, leg, leg_velocity, point_to_knots, segment_velocity, SHEET_ON)
 from .field import field_velocity, field_velocity_batch
 from .posing import bound_length, branch_directions, dcm_ned_to_body_1, place_lattice, posed_lattice, to_ned
+from .structs import LatticeArrays
 
 __all__ = ["evaluate_one", "effective_wind", "evaluate_batch_serial", "evaluate_batch_parallel", "field_velocity_batch",
            "field_velocity", "assemble_and_solve", "static_aic", "lu_solve_inplace", "posed_lattice", "place_lattice",
@@ -43,28 +44,23 @@ _jit = nb.njit(cache=True, fastmath=False, error_model="numpy")
 
 
 @_jit
-def evaluate_one(
-    pos, euler, airspeed, alpha, beta,
-    knot_x1_b, knot_x3_b, knot_vehicle, knot_surface,
-    surface_origin_b, surface_vehicle, surface_knot_start, surface_panel_start, surface_core_scale,
-    panel_left_knot, panel_vehicle, control_b, normal_b, aic_static, eval_b, grad_w, vehicle_panel_start,
-    cutoff, core_mode, aic_core_mode, nu,
-    gamma_out, vpts_out, wind_ned_out, wind_b_out, omega_b_out, omega_ned_out, overlap_core=-1.0, sheet=None, keep=None,
-):
+def evaluate_one(lat, pos, euler, airspeed, alpha, beta, gamma_out, vpts_out, wind_ned_out, wind_b_out, omega_b_out,
+                 omega_ned_out, sheet=None, keep=None):
     """One formation: pose, joint solve, induced velocity at the evaluation points (other
     vehicles only) and the effective translational and rotational wind per vehicle.
-    ``overlap_core`` (m, 0 = off): the minimum core of the other vehicles' branches in the solve
-    and the field (see :func:`formation_env.wake.field.field_velocity`); negative (the default):
-    the default overlap core of this lattice, :func:`default_overlap_core` (what ``WakeModel``
-    uses unless told otherwise). ``sheet`` (None: the thesis; a float, :data:`SHEET_ON`: a compile-time
-    switch): the other vehicles' trailing legs take the sheet law near their wake plane in the solve and the
-    field (``WakeModel.sheet``). ``keep``: see :func:`formation_env.wake.aic.assemble_and_solve`."""
-    if overlap_core < 0.0:
-        overlap_core = default_overlap_core(knot_x1_b, knot_x3_b, surface_knot_start)
+    ``lat``: the body-axis lattice and the solve's settings (a :class:`~formation_env.wake.structs.LatticeArrays`;
+    its ``overlap_core_m``, m, 0 = off: the minimum core of the other vehicles' branches in the solve and the field,
+    see :func:`formation_env.wake.field.field_velocity`). Poses and air data (V, ...) as
+    :func:`~formation_env.wake.posing.posed_lattice`'s; the outputs: circulation (N,), induced velocity at the
+    evaluation points (N, 3) NED, and per vehicle (V, 3) the wind NED and body and the rotational wind body and NED.
+    ``sheet`` (None: the thesis; a float, :data:`SHEET_ON`: a compile-time switch): the other vehicles' trailing
+    legs take the sheet law near their wake plane in the solve and the field (``WakeModel.sheet``). ``keep``: see
+    :func:`formation_env.wake.aic.assemble_and_solve`."""
+    panel_left_knot, panel_vehicle, control_b, eval_b = lat.panel_left_knot, lat.panel_vehicle, lat.control_b, lat.eval_b
+    core_mode, aic_core_mode, overlap_core = lat.core_mode, lat.aic_core_mode, lat.overlap_core_m
     n_panels = panel_left_knot.shape[0]
-    rot, vel, trail, x1, x3, origin, bound_dir, chord_dir, r1, inv1, r3, inv3 = posed_lattice(
-        pos, euler, airspeed, alpha, beta, knot_x1_b, knot_x3_b, knot_vehicle, knot_surface,
-        surface_origin_b, surface_vehicle, surface_knot_start)
+    posed = posed_lattice(lat, pos, euler, airspeed, alpha, beta)
+    rot, x1 = posed.rot, posed.x1
     aic = np.empty((n_panels, n_panels))
     # Where the field's law at the evaluation points is the solve's at the control points (the same points,
     # the viscous core in both), every other-vehicle branch the field needs was already evaluated for the
@@ -72,9 +68,7 @@ def evaluate_one(
     # evaluated once); otherwise evaluate the field's branches separately.
     shared = aic_core_mode == core_mode and _same_points(eval_b, control_b)
     vcross = np.empty((n_panels, n_panels, 3) if shared else (0, 0, 3))
-    assemble_and_solve(x1, x3, bound_dir, chord_dir, trail, vel, rot, pos, origin, airspeed, knot_vehicle, knot_surface,
-                       surface_knot_start, surface_core_scale, panel_left_knot, panel_vehicle, control_b, normal_b, aic_static, cutoff,
-                       aic_core_mode, nu, overlap_core, aic, gamma_out, r1, inv1, r3, inv3, vcross, sheet, keep)
+    assemble_and_solve(lat, posed, aic, gamma_out, vcross, sheet, keep)
     if shared:
         for j in range(n_panels):
             v = panel_vehicle[j]
@@ -92,21 +86,20 @@ def evaluate_one(
             vpts_out[j, 2] = wz
     else:
         pt = np.empty(3)
-        frames = sheet_strip_frames(sheet, trail, x3, knot_vehicle, knot_surface)
+        frames = sheet_strip_frames(sheet, posed.trail, posed.x3, lat.knot_vehicle, lat.knot_surface)
         for j in range(n_panels):
             v = panel_vehicle[j]
             to_ned(rot[v], pos[v], eval_b[j], pt)
             recv_w = 0.0
             if sheet is not None:
                 recv_w = bound_length(x1, panel_left_knot[j])
-            wx, wy, wz = field_velocity(pt[0], pt[1], pt[2], v, False, x1, x3, bound_dir, chord_dir, trail, origin,
-                                        airspeed, gamma_out, surface_knot_start, surface_panel_start,
-                                        surface_vehicle, surface_core_scale, cutoff, core_mode, nu, overlap_core,
-                                        r1, inv1, r3, inv3, sheet, recv_w, frames)
+            wx, wy, wz = field_velocity(pt[0], pt[1], pt[2], v, False, lat, posed, gamma_out, core_mode, overlap_core,
+                                        sheet, recv_w, frames)
             vpts_out[j, 0] = wx
             vpts_out[j, 1] = wy
             vpts_out[j, 2] = wz
-    effective_wind(rot, vpts_out, grad_w, vehicle_panel_start, wind_ned_out, wind_b_out, omega_b_out, omega_ned_out)
+    effective_wind(rot, vpts_out, lat.grad_w, lat.vehicle_panel_start, wind_ned_out, wind_b_out, omega_b_out,
+                   omega_ned_out)
 
 
 @_jit
@@ -188,24 +181,16 @@ def effective_wind(rot, vpts, grad_w, vehicle_panel_start, wind_ned_out, wind_b_
 
 def _make_batch(parallel: bool):
     @nb.njit(cache=True, parallel=parallel, error_model="numpy")
-    def evaluate_batch(
-        pos, euler, airspeed, alpha, beta,
-        knot_x1_b, knot_x3_b, knot_vehicle, knot_surface,
-        surface_origin_b, surface_vehicle, surface_knot_start, surface_panel_start, surface_core_scale,
-        panel_left_knot, panel_vehicle, control_b, normal_b, aic_static, eval_b, grad_w, vehicle_panel_start,
-        cutoff, core_mode, aic_core_mode, nu,
-        gamma_out, vpts_out, wind_ned_out, wind_b_out, omega_b_out, omega_ned_out, overlap_core, sheet=None,
-    ):
+    def evaluate_batch(lattice, pos, euler, airspeed, alpha, beta, gamma_out, vpts_out, wind_ned_out, wind_b_out,
+                       omega_b_out, omega_ned_out, sheet=None):
+        """:func:`evaluate_one` of B formations (poses, air data and outputs with the batch axis first) of the
+        lattice ``lattice``: a :class:`~formation_env.wake.structs.LatticeArrays` or the plain tuple of its fields
+        (what :meth:`formation_env.wake.WakeModel.evaluate` passes: numba types a plain tuple argument in C, a
+        named tuple through Python)."""
+        lat = LatticeArrays(*lattice)
         for b in nb.prange(pos.shape[0]):
-            evaluate_one(
-                pos[b], euler[b], airspeed[b], alpha[b], beta[b],
-                knot_x1_b, knot_x3_b, knot_vehicle, knot_surface,
-                surface_origin_b, surface_vehicle, surface_knot_start, surface_panel_start, surface_core_scale,
-                panel_left_knot, panel_vehicle, control_b, normal_b, aic_static, eval_b, grad_w, vehicle_panel_start,
-                cutoff, core_mode, aic_core_mode, nu,
-                gamma_out[b], vpts_out[b], wind_ned_out[b], wind_b_out[b], omega_b_out[b], omega_ned_out[b],
-                overlap_core, sheet,
-            )
+            evaluate_one(lat, pos[b], euler[b], airspeed[b], alpha[b], beta[b], gamma_out[b], vpts_out[b],
+                         wind_ned_out[b], wind_b_out[b], omega_b_out[b], omega_ned_out[b], sheet)
 
     return evaluate_batch
 

@@ -18,6 +18,7 @@ import numpy as np
 
 from ..geometry import Vehicle
 from . import kernels
+from .arrays import lattice_arrays
 from .lattice import EVAL_POINTS, ROTATIONAL_METHODS, build_template, gradient_weights
 from .state import FormationState
 
@@ -172,10 +173,9 @@ class WakeModel:
         self.aic_static = kernels.static_aic(t.knot_x1_b, t.knot_x3_b, t.knot_vehicle, t.knot_surface, t.surface_knot_start,
                                              t.panel_left_knot, t.panel_vehicle, t.control_b, t.normal_b, t.cutoff_m)
         self._core_mode = CORES[core]
-        self._geometry_args = (
-            t.knot_x1_b, t.knot_x3_b, t.knot_vehicle, t.knot_surface,
-            t.surface_origin_b, t.surface_vehicle, t.surface_knot_start, t.surface_panel_start, t.surface_core_scale,
-        )
+        # the kernels' struct, passed as the plain tuple of its fields: numba types that in C, a named tuple in
+        # Python (each call)
+        self._lattice = tuple(lattice_arrays(self))
 
     @property
     def n_vehicles(self) -> int:
@@ -201,20 +201,13 @@ class WakeModel:
     def evaluate(self, state: FormationState) -> WakeSolution:
         """Joint solve of every vehicle's circulation and the effective induced wind on each."""
         state = self._check_state(state)
-        t = self.template
         b, v, n = state.batch_size, self.n_vehicles, self.n_panels
         gamma = np.empty((b, n))
         vpts = np.empty((b, n, 3))
         out = [np.empty((b, v, 3)) for _ in range(4)]
         kernel = kernels.evaluate_batch_parallel if b >= _PARALLEL_MIN_BATCH else kernels.evaluate_batch_serial
-        kernel(
-            state.position_ned, state.euler_rad, state.airspeed_mps, state.alpha_rad, state.beta_rad,
-            *self._geometry_args[:4], *self._geometry_args[4:],
-            t.panel_left_knot, t.panel_vehicle, t.control_b, t.normal_b, self.aic_static, self.eval_b, self.grad_w,
-            t.vehicle_panel_start, t.cutoff_m, self._core_mode,
-            self._core_mode if self.viscous_aic else kernels.CORE_NONE, self.kinematic_viscosity,
-            gamma, vpts, *out, self.overlap_core_m, kernels.SHEET_ON if self.sheet else None,
-        )
+        kernel(self._lattice, state.position_ned, state.euler_rad, state.airspeed_mps, state.alpha_rad, state.beta_rad,
+               gamma, vpts, *out, kernels.SHEET_ON if self.sheet else None)
         return WakeSolution(gamma, vpts, *out)
 
     def induced_velocity(
@@ -268,11 +261,10 @@ class WakeModel:
                                  f"{rw[bad][0]!r} at point {int(np.argmax(bad))}")
         out = np.empty(pts.shape)
         kernels.field_velocity_batch(
-            np.ascontiguousarray(pts), np.ascontiguousarray(vf), only_vehicle is not None,
+            np.ascontiguousarray(pts), np.ascontiguousarray(vf), only_vehicle is not None, self._lattice,
             state.position_ned, state.euler_rad, state.airspeed_mps, state.alpha_rad, state.beta_rad,
-            np.ascontiguousarray(solution.circulation), *self._geometry_args,
-            self.template.cutoff_m, core_mode, self.kinematic_viscosity,
-            self.overlap_core_m if others else 0.0, out, kernels.SHEET_ON if (self.sheet and others) else None, rw,
+            np.ascontiguousarray(solution.circulation), core_mode, self.overlap_core_m if others else 0.0, out,
+            kernels.SHEET_ON if (self.sheet and others) else None, rw,
         )
         return out
 

@@ -10,7 +10,10 @@ import math
 import numba as nb
 import numpy as np
 
-__all__ = ["dcm_ned_to_body_1", "place_lattice", "to_ned", "bound_length", "branch_directions", "posed_lattice"]
+from .structs import PosedLattice
+
+__all__ = ["dcm_ned_to_body_1", "place_lattice", "to_ned", "bound_length", "branch_directions", "posed_lattice",
+           "PosedLattice"]
 
 _jit = nb.njit(cache=True, fastmath=False, error_model="numpy")
 
@@ -100,22 +103,22 @@ def branch_directions(x1, x3, knot_surface, surface_knot_start, bound_dir, chord
 
 
 @_jit
-def posed_lattice(pos, euler, airspeed, alpha, beta, knot_x1_b, knot_x3_b, knot_vehicle, knot_surface,
-                  surface_origin_b, surface_vehicle, surface_knot_start):
-    """Pose one formation's lattice in NED (see :func:`place_lattice`), its branch directions, and
-    scratch arrays for the point-to-knot vectors."""
+def posed_lattice(lat, pos, euler, airspeed, alpha, beta):
+    """One formation's lattice ``lat`` (a :class:`~formation_env.wake.structs.LatticeArrays`) posed in NED at the
+    vehicles' poses and air data (see :func:`place_lattice`), with its branch directions and scratch arrays for
+    the point-to-knot vectors: a :class:`PosedLattice`."""
     nv = pos.shape[0]
-    n_knots = knot_x1_b.shape[0]
+    n_knots = lat.knot_x1_b.shape[0]
     rot = np.empty((nv, 3, 3))
     vel = np.empty((nv, 3))
     trail = np.empty((nv, 3))
     x1 = np.empty((n_knots, 3))
     x3 = np.empty((n_knots, 3))
-    origin = np.empty((surface_origin_b.shape[0], 3))
-    place_lattice(pos, euler, airspeed, alpha, beta, knot_x1_b, knot_x3_b, knot_vehicle,
-                  surface_origin_b, surface_vehicle, rot, vel, trail, x1, x3, origin)
+    origin = np.empty((lat.surface_origin_b.shape[0], 3))
+    place_lattice(pos, euler, airspeed, alpha, beta, lat.knot_x1_b, lat.knot_x3_b, lat.knot_vehicle,
+                  lat.surface_origin_b, lat.surface_vehicle, rot, vel, trail, x1, x3, origin)
     bound_dir = np.empty((n_knots, 3))
     chord_dir = np.empty((n_knots, 3))
-    branch_directions(x1, x3, knot_surface, surface_knot_start, bound_dir, chord_dir)
-    return (rot, vel, trail, x1, x3, origin, bound_dir, chord_dir,
-            np.empty((n_knots, 3)), np.empty(n_knots), np.empty((n_knots, 3)), np.empty(n_knots))
+    branch_directions(x1, x3, lat.knot_surface, lat.surface_knot_start, bound_dir, chord_dir)
+    return PosedLattice(pos, airspeed, rot, vel, trail, x1, x3, origin, bound_dir, chord_dir,
+                        np.empty((n_knots, 3)), np.empty(n_knots), np.empty((n_knots, 3)), np.empty(n_knots))

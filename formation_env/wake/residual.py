@@ -34,7 +34,7 @@ Scaling: the residual's winds are proportional to the source's circulation, so t
 source's lift per unit rho V (sum of Gamma times the bound vortex's spanwise extent, m^3/s) over that of the
 table's source at the trim; the saving (a ratio of the receiver's drag change to its own drag) is not scaled.
 
-The table is built once (``python -m formation_env.verification.residual_table``: 130,000 pair solves, 243 s on 2 cores)
+The table is built once (``python -m formation_env.verification.residual_table``: 130,000 pair solves)
 and shipped compressed in ``formation_env/data/residual_table.npz`` (float16, 1.6 MB) with its grids and
 provenance; :func:`load_table` reads it, ``tests/wake/test_residual.py`` re-computes nodes of it.
 """
@@ -86,9 +86,10 @@ def lift_per_rho_v(wake, gamma, v):
     """Lift per unit rho V of vehicle ``v`` (m^3/s): sum over its panels of Gamma times the bound vortex's
     spanwise (body y) extent. ``wake`` a :class:`~formation_env.wake.arrays.WakeArrays`, ``gamma`` (N,)."""
     total = 0.0
-    x1 = wake.knot_x1_b
-    for j in range(wake.vehicle_panel_start[v], wake.vehicle_panel_start[v + 1]):
-        k = wake.panel_left_knot[j]
+    lat = wake.lattice
+    x1 = lat.knot_x1_b
+    for j in range(lat.vehicle_panel_start[v], lat.vehicle_panel_start[v + 1]):
+        k = lat.panel_left_knot[j]
         total += gamma[j] * abs(x1[k + 1, 1] - x1[k, 1])
     return total
 

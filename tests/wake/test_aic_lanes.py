@@ -28,18 +28,13 @@ B = 2.9  # Aerosonde span, m
 def _solve_with(fn):
     @nb.njit
     def run(w, pos, euler, speed, alpha, beta, store):
-        rot, vel, trail, x1, x3, origin, bound_dir, chord_dir, r1, inv1, r3, inv3 = posed_lattice(
-            pos, euler, speed, alpha, beta, w.knot_x1_b, w.knot_x3_b, w.knot_vehicle, w.knot_surface,
-            w.surface_origin_b, w.surface_vehicle, w.surface_knot_start)
+        posed = posed_lattice(w.lattice, pos, euler, speed, alpha, beta)
         n = w.n_panels
         aic = np.empty((n, n))
         gamma = np.empty(n)
         vcross = np.zeros((n, n, 3) if store else (0, 0, 3))
         keep = np.empty((n, n + 1))
-        fn(x1, x3, bound_dir, chord_dir, trail, vel, rot, pos, origin, speed, w.knot_vehicle, w.knot_surface,
-           w.surface_knot_start, w.surface_core_scale, w.panel_left_knot, w.panel_vehicle, w.control_b, w.normal_b,
-           w.aic_static, w.cutoff_m, w.aic_core_mode, w.kinematic_viscosity, w.overlap_core_m, aic, gamma, r1, inv1,
-           r3, inv3, vcross, w.sheet, keep)
+        fn(w.lattice, posed, aic, gamma, vcross, w.sheet, keep)
         return keep, gamma, vcross
     return run
 
@@ -82,7 +77,7 @@ CASES = [(n, tail, sheet, overlap, viscous)
 @pytest.mark.parametrize("n,tail,sheet,overlap,viscous", CASES)
 def test_lanes_equal_the_scalar_assembly_bit_for_bit(n, tail, sheet, overlap, viscous):
     w = _arrays(n, tail, sheet, overlap, viscous)
-    assert w.knot_x1_b.shape[0] <= KMAX  # the lanes path is the one under test
+    assert w.lattice.knot_x1_b.shape[0] <= KMAX  # the lanes path is the one under test
     rng = np.random.default_rng(1000 * n + 100 * tail + 10 * sheet + 2 * overlap + viscous)
     for trial in range(12):
         # from the slots (wake planes, the sheet region) to overlapping, coincident and 1 um apart
@@ -100,7 +95,7 @@ def test_lanes_equal_the_scalar_assembly_bit_for_bit(n, tail, sheet, overlap, vi
 def test_a_lattice_beyond_the_lanes_takes_the_scalar_assembly():
     """Two Aerosondes of 80 horseshoes (162 knots > KMAX): the scalar assembly, the same circulation."""
     w = _arrays(2, False, False, True, True, nseg=80)
-    assert w.knot_x1_b.shape[0] > KMAX
+    assert w.lattice.knot_x1_b.shape[0] > KMAX
     pos, euler, speed, alpha, beta = _poses(np.random.default_rng(5), 2, 0.1)
     got = _lanes(w, pos, euler, speed, alpha, beta, True)
     want = _scalar(w, pos, euler, speed, alpha, beta, True)
@@ -125,12 +120,8 @@ def test_loads_over_lanes_equal_the_scalar_field_bit_for_bit(n, tail, sheet, ove
         pos, euler, speed, alpha, beta = _poses(rng, n, (0.0, 0.02, 0.1, 0.5, 1.5, 3.0)[trial])
         npn = w.n_panels
         gamma = np.empty(npn)
-        evaluate_one(pos, euler, speed, alpha, beta, w.knot_x1_b, w.knot_x3_b, w.knot_vehicle, w.knot_surface,
-                     w.surface_origin_b, w.surface_vehicle, w.surface_knot_start, w.surface_panel_start,
-                     w.surface_core_scale, w.panel_left_knot, w.panel_vehicle, w.control_b, w.normal_b, w.aic_static,
-                     w.eval_b, w.grad_w, w.vehicle_panel_start, w.cutoff_m, w.core_mode, w.aic_core_mode,
-                     w.kinematic_viscosity, gamma, np.empty((npn, 3)), *[np.empty((n, 3)) for _ in range(4)],
-                     w.overlap_core_m, w.sheet)
+        evaluate_one(w.lattice, pos, euler, speed, alpha, beta, gamma, np.empty((npn, 3)),
+                     *[np.empty((n, 3)) for _ in range(4)], w.sheet)
         both_form, both_alone = np.empty(n), np.empty(n)
         induced_drags_one(w, alone, pos, euler, speed, alpha, beta, gamma, both_form, both_alone)
         d_form = np.empty(n)

@@ -115,11 +115,8 @@ def test_close_formation_saving_from_aircraft_state():
                                      model.kinematic_viscosity, model.viscous_aic), sim.wing_origin_body)
     gamma, vpts = np.empty(n), np.empty((n, 3))
     w = wake
-    evaluate_one(pos, euler, speed, alpha, beta, w.knot_x1_b, w.knot_x3_b, w.knot_vehicle, w.knot_surface,
-                 w.surface_origin_b, w.surface_vehicle, w.surface_knot_start, w.surface_panel_start,
-                 w.surface_core_scale, w.panel_left_knot, w.panel_vehicle, w.control_b, w.normal_b, w.aic_static,
-                 w.eval_b, w.grad_w, w.vehicle_panel_start, w.cutoff_m, w.core_mode, w.aic_core_mode,
-                 w.kinematic_viscosity, gamma, vpts, *[np.empty((nv, 3)) for _ in range(4)])
+    # the thesis's legs (no sheet switch), with the lattice's overlap core
+    evaluate_one(w.lattice, pos, euler, speed, alpha, beta, gamma, vpts, *[np.empty((nv, 3)) for _ in range(4)])
     saving = np.empty(nv)
     induced_drag_saving_one(wake, alone, pos, euler, speed, alpha, beta, gamma, saving)
     assert saving[1] == pytest.approx(0.36, abs=0.01)

@@ -133,4 +133,4 @@ def test_batched_arrays_are_per_vehicle():
     blocks = c.roll_weight.reshape(3, -1)
     assert np.array_equal(blocks[0], blocks[1]) and np.array_equal(blocks[0], blocks[2])
     assert np.all(np.isfinite(c.roll_weight)) and c.panel_length_m.shape == (18,)
-    assert np.array_equal(wake_arrays(model, np.zeros(3)).vehicle_panel_start, np.array([0, 6, 12, 18]))
+    assert np.array_equal(wake_arrays(model, np.zeros(3)).lattice.vehicle_panel_start, np.array([0, 6, 12, 18]))

@@ -132,6 +132,7 @@ def test_shared_field_equals_the_separately_evaluated_field(n_vehicles):
     points moved by one ulp (which takes the separate path): equal to round-off, over random formations
     including vehicles inside each other's cores and overlapping."""
     from formation_env.wake import kernels
+    from formation_env.wake.arrays import lattice_arrays
 
     model = WakeModel([aerosonde(nseg=10)] * n_vehicles)
     t = model.template
@@ -147,12 +148,8 @@ def test_shared_field_equals_the_separately_evaluated_field(n_vehicles):
         for label, eval_b in (("shared", t.control_b), ("separate", np.nextafter(t.control_b, np.inf))):
             gamma, vpts = np.empty(t.n_panels), np.empty((t.n_panels, 3))
             winds = [np.empty((n_vehicles, 3)) for _ in range(4)]
-            kernels.evaluate_one(pos, euler, speed, alpha, beta, t.knot_x1_b, t.knot_x3_b, t.knot_vehicle,
-                                 t.knot_surface, t.surface_origin_b, t.surface_vehicle, t.surface_knot_start,
-                                 t.surface_panel_start, t.surface_core_scale, t.panel_left_knot, t.panel_vehicle,
-                                 t.control_b, t.normal_b, model.aic_static, np.ascontiguousarray(eval_b),
-                                 model.grad_w, t.vehicle_panel_start, t.cutoff_m, model._core_mode, model._core_mode,
-                                 model.kinematic_viscosity, gamma, vpts, *winds)
+            lat = lattice_arrays(model)._replace(eval_b=np.ascontiguousarray(eval_b), aic_core_mode=model.core_mode)
+            kernels.evaluate_one(lat, pos, euler, speed, alpha, beta, gamma, vpts, *winds)
             out[label] = gamma, vpts
         np.testing.assert_array_equal(out["shared"][0], out["separate"][0])  # the solve is untouched
         scale = max(np.abs(out["separate"][1]).max(), 1e-3)

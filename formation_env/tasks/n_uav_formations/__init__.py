@@ -97,4 +97,6 @@ TASKS = {name: register_task(Task(name, SCENARIOS[name], gym_id, 1, baselines=("
                                   test_randomisation={"initial_offset_m": 0.3}))
          for name, gym_id, _ in _DEFS}
 
-from . import rotation  # noqa: E402,F401  (registers vee_rotation, built on vee5's optimum)
+from .rotation import register as _register_rotation  # noqa: E402
+
+_register_rotation(CLOSE_FORMATIONS_OPTIONS)  # vee_rotation, built on vee5's optimum

@@ -40,7 +40,7 @@ from ...sim.config import RewardWeights
 from ..base import EvaluationProtocol, Task, register_task
 from . import optimum as _optimum
 
-__all__ = ["PHASES_S", "rotation_keyframes", "leader_dropback_keyframes", "SCENARIO", "TASK"]
+__all__ = ["PHASES_S", "rotation_keyframes", "leader_dropback_keyframes", "SCENARIO", "ROTATION_REWARD", "register"]
 
 #: phase boundaries, s: hold to 15, port side out 15-25, forward 25-50, starboard side to port 50-62, hold to 80
 PHASES_S = (15.0, 25.0, 50.0, 62.0, 80.0)
@@ -111,15 +111,12 @@ ROTATION_REWARD = RewardWeights(slot_scale_m=0.29, along_track_weight=1.0, benef
                                 separation=25.0, barrier_separation_b=1.5, hold=1.0, hold_radius_b=0.75)
 
 
-def _options() -> dict:
-    from . import CLOSE_FORMATIONS_OPTIONS
-
-    return {**CLOSE_FORMATIONS_OPTIONS, "reward": ROTATION_REWARD}
-
-
-TASK = register_task(Task("vee_rotation", SCENARIO, "formation_env/VeeRotation", 1,
-                          options=_options(),
-                          evaluation=EvaluationProtocol(levels=(0.0, 1.0), metric="reconfig_success"),
-                          learning="all", baselines=("pid", "station_keeper"),
-                          description="vee of 5 rotating the lead (leader to a trailing slot, the others up)",
-                          test_randomisation={"initial_offset_m": 0.3}))
+def register(base_options: dict) -> Task:
+    """Registers ``vee_rotation``: the N-UAV formations' options ``base_options`` with :data:`ROTATION_REWARD`.
+    The package calls it with its options (it owns them; this module does not import the package)."""
+    return register_task(Task("vee_rotation", SCENARIO, "formation_env/VeeRotation", 1,
+                              options={**base_options, "reward": ROTATION_REWARD},
+                              evaluation=EvaluationProtocol(levels=(0.0, 1.0), metric="reconfig_success"),
+                              learning="all", baselines=("pid", "station_keeper"),
+                              description="vee of 5 rotating the lead (leader to a trailing slot, the others up)",
+                              test_randomisation={"initial_offset_m": 0.3}))
