@@ -35,7 +35,7 @@ from ..wake.benefit import AIR_DENSITY_SL, induced_drag_saving_one
 from .guidance import formation_demands, gust_wind_ned, leader_wind, reference_path, schedule_features
 from .kernels import ell_inputs, min_separation_each, position_finite, separation_each_known, step_one, step_separation
 from .observe import box_depth_each, observe_formation, reward_formation, slot_error
-from .params import RESIDUAL, SETPOINTS, SURFACES
+from .params import RESIDUAL, SETPOINTS, SURFACES, TURBULENCE_LANES, TURBULENCE_OFF, TURBULENCE_SPECTRAL
 
 __all__ = ["FieldScratch", "DecisionScratch", "field_scratch", "decision_scratch", "ground_velocity_ned", "demands",
            "sample_turbulence", "ambient_wind", "setpoint_shift", "control", "physics_and_events",
@@ -156,22 +156,23 @@ def demands(scenario, s, b, t, vel):
 @_jit
 def sample_turbulence(turbulence, field, s, b, fs, t):
     """Turbulence of formation b at time t (s; the UAVs' current positions are there then), into
-    ``s.gust_ned[b]`` (V, 3) m/s NED and ``s.gust_omega_body[b]`` (V, 3) rad/s body: ``turbulence`` 3 the
-    spectral field (:mod:`formation_env.atmosphere.spectral_field`) at each UAV's CG, frozen in the air
-    moving with the steady wind, with its rotational gusts over the span and to the tail; 1 the lanes
-    (cross-correlated, transport-delayed); 2 independent lanes (each UAV its own stream, no delay); the
-    lanes have no rotational gusts (zero). Non-finite values (a diverged UAV, episode ending) read as 0.
+    ``s.gust_ned[b]`` (V, 3) m/s NED and ``s.gust_omega_body[b]`` (V, 3) rad/s body. ``turbulence``:
+    ``TURBULENCE_SPECTRAL`` the spectral field (:mod:`formation_env.atmosphere.spectral_field`) at each UAV's CG,
+    frozen in the air moving with the steady wind, with its rotational gusts over the span and to the tail;
+    ``TURBULENCE_LANES`` the lanes (cross-correlated, transport-delayed); ``TURBULENCE_INDEPENDENT`` independent
+    lanes (each UAV its own stream, no delay); the lanes have no rotational gusts (zero). Non-finite values (a
+    diverged UAV, episode ending) read as 0.
     ``field`` the :class:`~formation_env.sim.params.TurbulenceParams`, fs a :class:`FieldScratch`."""
     nv = s.gust_ned.shape[1]
     chi = math.atan2(s.velocity_demand[b, 0, 1], s.velocity_demand[b, 0, 0])
     if not math.isfinite(chi):
         chi = 0.0
-    if turbulence == 3:
+    if turbulence == TURBULENCE_SPECTRAL:
         x = s.aircraft[b]
         sample_modes_one(field.modes, s.modes, b, x[:, POS_N:POS_D + 1], x[:, QUAT0:QUAT0 + 4], t, s.steady_wind[b], chi,
                          s.gust_ned[b], s.gust_omega_body[b])
         return
-    if turbulence == 1:
+    if turbulence == TURBULENCE_LANES:
         pos = s.aircraft[:, :, POS_N:POS_D + 1]
         sample_field_one(field.lanes, s.field, b, pos, chi, s.gust_ned, fs.along, fs.cross, fs.down, fs.slot0,
                          fs.slot1, fs.frac, fs.corr, fs.lo, fs.gust)
@@ -299,9 +300,9 @@ def advance_turbulence(turbulence, field, s, b, fs):
     """The turbulence of formation b one step forward and sampled at the new positions (called after
     the physics step, before the step counter moves on: the new positions are at (step + 1) dt); the
     lanes advance their filters, the spectral field is frozen and only moves with the air. Nothing when
-    ``turbulence`` is 0. fs: a :class:`FieldScratch`."""
-    if turbulence != 0:
-        if turbulence != 3:
+    ``turbulence`` is ``TURBULENCE_OFF``. fs: a :class:`FieldScratch`."""
+    if turbulence != TURBULENCE_OFF:
+        if turbulence != TURBULENCE_SPECTRAL:
             advance_field_one(field.lanes, s.field, b, fs.normals)
         sample_turbulence(turbulence, field, s, b, fs, (s.step[b] + 1) * field.modes.dt_s)
 

@@ -2,7 +2,8 @@
 "Converged saving"): one pair's outputs on a grid of relative poses with the fine and the base lattice, their
 difference, and the command that writes the shipped table.
 
-``python -m formation_env.verification.residual_table [--processes 2] [--force]`` (243 s on 2 cores).
+``python -m formation_env.verification.residual_table [--processes 2] [--force]`` (slow: the fine lattice is solved
+at every node of the grid, so ``--processes`` spreads the nodes over processes).
 """
 
 from __future__ import annotations

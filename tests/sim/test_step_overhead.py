@@ -1,5 +1,5 @@
 """The decision's Python-side shortcuts (issue 26, single env): each must give exactly what the general path
-gives. The compiled entry point resolved once per Simulation (formation_env.sim.step._EntryPoints) against
+gives. The compiled entry point resolved once per Simulation (formation_env.sim.dispatch.EntryPoints) against
 numba's dispatcher; the infos' compiled separations against separation_each; the adapters' fast action check
 against the general one."""
 
@@ -8,6 +8,7 @@ import pytest
 
 import formation_env
 import formation_env.sim.step as step_mod
+from formation_env.sim.dispatch import EntryPoints, StepStructs
 from formation_env.envs.parallel import check_action
 from formation_env.sim import EnvConfig, Randomisation, Simulation
 from formation_env.sim.infos import separation_each
@@ -24,13 +25,13 @@ def _step_three(a, b, c, act):
     dispatcher (a Fortran-ordered actions array never takes a fast path): bit for bit the same."""
     for sim in (a, b, c):
         sim._actions[:, sim.agent_mask] = act
-    kernel, args = step_mod._ENTRY.get(a.params, a.state, a._actions, a.output, packed=True)
+    kernel, args = step_mod.ENTRY_POINTS.get(a.params, a.state, a._actions, a.output, packed=True)
     kernel(*args, 0, 2)
-    kernel, args = step_mod._ENTRY.get(c.params, c.state, c._actions, c.output, packed=False)
+    kernel, args = step_mod.ENTRY_POINTS.get(c.params, c.state, c._actions, c.output, packed=False)
     assert args[0] is c.params and kernel is not step_mod.decide_range
     kernel(*args, 0, 2)
     fortran = np.asfortranarray(b._actions)
-    assert step_mod._ENTRY.get(b.params, b.state, fortran, b.output)[0] is step_mod.decide_range
+    assert step_mod.ENTRY_POINTS.get(b.params, b.state, fortran, b.output)[0] is step_mod.decide_range
     step_mod.step(b.params, b.state, fortran, b.output)
     for other in (b, c):
         for name in ("observation", "reward", "terminated", "truncated", "separation_m", "slot_error_m"):
@@ -45,10 +46,10 @@ def test_entry_points_step_bit_for_bit_as_the_dispatcher():
     rng = np.random.default_rng(3)
     for _ in range(6):
         _step_three(a, b, c, rng.uniform(-1, 1, size=(2, a.n_agents, 4)))
-    kernel, args = step_mod._ENTRY.get(a.params, a.state, a._actions, a.output)
+    kernel, args = step_mod.ENTRY_POINTS.get(a.params, a.state, a._actions, a.output)
     assert kernel is not step_mod.decide_range  # the fast path was taken for the Simulation's own arrays
-    assert isinstance(args[0], step_mod.StepStructs) and args[1] is a._actions
-    again = step_mod._ENTRY.get(a.params, a.state, a._actions, a.output)
+    assert isinstance(args[0], StepStructs) and args[1] is a._actions
+    again = step_mod.ENTRY_POINTS.get(a.params, a.state, a._actions, a.output)
     assert again[0] is kernel and again[1][0] is args[0]  # packed and resolved once
     # the packed structs share the Simulation's arrays: what Python writes afterwards (a reset of one formation,
     # the state written in place) is what the packed step reads, and what it writes is what Python reads
@@ -56,7 +57,7 @@ def test_entry_points_step_bit_for_bit_as_the_dispatcher():
         sim.reset(indices=[1], seeds=[99])
     for _ in range(4):
         _step_three(a, b, c, rng.uniform(-1, 1, size=(2, a.n_agents, 4)))
-    assert step_mod._ENTRY.get(a.params, a.state, a._actions, a.output)[1][0] is args[0]
+    assert step_mod.ENTRY_POINTS.get(a.params, a.state, a._actions, a.output)[1][0] is args[0]
     # Simulation.step itself (serial or threaded, whichever this machine's settings give) agrees too
     d = _sim()
     d.reset(seeds=[11, 12])
@@ -71,7 +72,7 @@ def test_entry_points_step_bit_for_bit_as_the_dispatcher():
 
 
 def test_entry_point_cache_is_bounded_and_checks_identity():
-    cache = step_mod._EntryPoints()
+    cache = EntryPoints(step_mod.decide_range, step_mod.decide_packed)
     sims = [_sim() for _ in range(cache.SIZE + 2)]
     for s in sims:
         s.reset(seeds=[1, 2])
