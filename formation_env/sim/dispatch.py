@@ -43,9 +43,10 @@ def threads() -> int:
     return max(1, int(nb.get_num_threads()))
 
 
-def run_parallel(kernel, n: int, args: tuple, n_threads: int) -> None:
+def run_parallel(kernel, n: int, args: tuple | list, n_threads: int) -> None:
     """``kernel(*args, start, stop)`` over 0..n in chunks, on the calling thread plus ``n_threads - 1``
-    pool workers taking chunks (about four per thread) from a shared counter."""
+    pool workers taking chunks (about four per thread) from a shared counter. ``args``: one tuple for every
+    thread, or a list of at least ``n_threads`` tuples, thread i taking ``args[i]`` (the calling thread 0)."""
     global _POOL, _POOL_SIZE
     if _POOL is None or _POOL_SIZE != n_threads - 1:
         if _POOL is not None:
@@ -55,15 +56,16 @@ def run_parallel(kernel, n: int, args: tuple, n_threads: int) -> None:
     n_chunks = -(-n // chunk)
     counter = itertools.count()  # next() is atomic under the GIL
 
-    def work():
+    def work(i):
+        a = args[i] if isinstance(args, list) else args
         while True:
             c = next(counter)
             if c >= n_chunks:
                 return
-            kernel(*args, c * chunk, min((c + 1) * chunk, n))
+            kernel(*a, c * chunk, min((c + 1) * chunk, n))
 
-    futures = [_POOL.submit(work) for _ in range(n_threads - 1)]
-    work()
+    futures = [_POOL.submit(work, i) for i in range(1, n_threads)]
+    work(0)
     for f in futures:
         f.result()
 
@@ -94,13 +96,15 @@ class ThreadTuner:
     def __init__(self) -> None:
         self.stats: dict = {}
 
-    def run(self, kernel, n: int, args: tuple) -> None:
+    def run(self, kernel, n: int, args: tuple | list) -> None:
+        """``kernel(*args, start, stop)`` over 0..n-1 (``args`` as :func:`run_parallel`'s; serially: the first)."""
+        serial_args = args[0] if isinstance(args, list) else args
         if n < PARALLEL_MIN_BATCH:
-            kernel(*args, 0, n)
+            kernel(*serial_args, 0, n)
             return
         n_threads = min(threads(), n)
         if n_threads <= 1:
-            kernel(*args, 0, n)
+            kernel(*serial_args, 0, n)
             return
         # [serial s, threaded s, calls, call of the next re-measurement, serial's re-measurement interval]
         st = self.stats.setdefault((kernel, n, n_threads), [math.inf, math.inf, 0, 0, self.EXPLORE])
@@ -117,7 +121,7 @@ class ThreadTuner:
         if use_threads:
             run_parallel(kernel, n, args, n_threads)
         else:
-            kernel(*args, 0, n)
+            kernel(*serial_args, 0, n)
         dt = time.perf_counter() - t0
         if calls > 1:
             k = 1 if use_threads else 0
@@ -133,9 +137,9 @@ class ThreadTuner:
 _TUNER = ThreadTuner()
 
 
-def run_chunks(kernel, n: int, args: tuple) -> None:
+def run_chunks(kernel, n: int, args: tuple | list) -> None:
     """``kernel(*args, start, stop)`` over formations 0..n-1, serially or threaded (the process's
-    :class:`ThreadTuner`)."""
+    :class:`ThreadTuner`); ``args`` as :func:`run_parallel`'s."""
     _TUNER.run(kernel, n, args)
 
 
@@ -184,61 +188,63 @@ def pack_structs(p, s, o):
 
 
 class EntryPoints:
-    """A decision kernel's compiled call per (params, state, out) objects, resolved once: ``get`` returns
-    ``(kernel, args)`` for ``kernel(*args, start, stop)``.
+    """Packed structs and resolved entry points of the decision kernels per Simulation: ``get`` returns
+    ``(entry, args)`` for :func:`run_chunks`.
 
-    ``kernel(params, state, actions, out, start, stop)`` is the decision over formations start..stop-1 and
-    ``packed_kernel(structs, actions, start, stop)`` the same on :class:`StepStructs`. numba's dispatcher
-    finds the compiled version for the argument types on every call, which for nested structs of arrays is
-    slow, and unboxes every array of them. The structs are immutable named tuples of arrays and a Simulation
-    passes the same objects every decision, so the entry point for their types is resolved once per set of
-    objects and called directly; for a serial call (``packed``) the structs are also packed once
-    (:func:`pack_structs`) and the packed kernel's entry point takes the one pointer.
+    A kernel here is a compiled ``kernel(structs, *extra, start, stop)`` over formations start..stop-1, with
+    ``structs`` a :class:`StepStructs` (the Simulation's (params, state, out) named tuples). Python passes one
+    pointer a call instead of numba unboxing the ~120 arrays of the three structs on every call, and the
+    compiled entry point for the argument types is resolved once (numba's dispatcher would look the types of
+    the nested structs up on every call, which is slow for them). Both costs matter for a single formation's
+    decision.
 
-    Threads take the unpacked call: every thread's unboxing gives it its own reference counts for the arrays,
-    while the packed structs' arrays have one count each, which every array view the step takes per formation
-    increments and decrements; two threads doing so on the same counts slowed a large batch noticeably (serial
-    calls equal).
+    Each thread gets structs of its own (``pack_structs`` once per thread): the packed arrays' reference counts
+    belong to their structs, and every array view the step takes per formation increments and decrements them;
+    threads sharing one set of counts would contend on them.
 
     Keyed by the objects' ids and checked by identity (the cache holds them, so an id cannot be reused while its
-    entry lives; the oldest of ``SIZE`` entries is dropped). ``actions`` is not part of the key (a caller may
-    pass a new array each decision): only a C-contiguous, aligned, writeable float64 array of 3 dimensions, the
-    type the entry points were resolved with, takes the fast paths; anything else goes through the dispatcher.
-    Any failure to resolve falls back to the dispatcher: results never depend on it (tested bit for bit)."""
+    entry lives; the oldest of ``SIZE`` entries is dropped). ``extra`` is not part of the key (a caller may pass
+    new arrays each call); the caller passes them in the one type the kernel is compiled for (a C-contiguous,
+    aligned, writeable array). Any failure to resolve falls back to numba's dispatcher with the same structs:
+    results never depend on it (tested bit for bit)."""
 
     SIZE = 8
 
-    def __init__(self, kernel, packed_kernel) -> None:
-        self.kernel, self.packed_kernel = kernel, packed_kernel
+    def __init__(self) -> None:
         self.cache: dict = {}
 
-    def get(self, params, state, actions, out, packed: bool = True) -> tuple:
-        a = actions
-        if not (isinstance(a, np.ndarray) and a.dtype == np.float64 and a.ndim == 3 and a.flags.c_contiguous
-                and a.flags.aligned and a.flags.writeable):
-            return self.kernel, (params, state, actions, out)
+    def structs(self, params, state, out, count: int = 1) -> list:
+        """At least ``count`` :class:`StepStructs` of (params, state, out), packed once and kept."""
+        return self._hit(params, state, out, count)[0]
+
+    def get(self, kernel, params, state, out, extra: tuple, n: int) -> tuple:
+        """``(entry, args)``: ``entry(*args[i], start, stop)`` runs ``kernel`` for thread i (of as many as
+        :func:`run_chunks` may use for ``n`` formations)."""
+        n_threads = max(1, min(threads(), n))
+        hit = self._hit(params, state, out, n_threads)
+        packs, entries = hit[0], hit[4]
+        entry = entries.get(kernel)
+        if entry is None:
+            entry = entries[kernel] = self._resolve(kernel, packs[0], extra)
+        return entry, [(pk, *extra) for pk in packs[:n_threads]]
+
+    def _hit(self, params, state, out, count: int) -> tuple:
         key = (id(params), id(state), id(out))
         hit = self.cache.get(key)
-        if hit is None or hit[3] is not params or hit[4] is not state or hit[5] is not out:
-            hit = self._resolve(key, params, state, actions, out)
-        if packed and hit[1] is not None:
-            return hit[1], (hit[2], actions)
-        return hit[0], (params, state, actions, out)
-
-    def _resolve(self, key, params, state, actions, out) -> tuple:
-        kernel, packed_kernel = self.kernel, self.packed_kernel
-        direct, packed_entry, packed = kernel, None, None
-        try:
-            kernel(params, state, actions, out, 0, 0)  # compiles or loads it (no formation stepped)
-            sig = tuple(kernel.typeof_pyval(x) for x in (params, state, actions, out)) + (nb.types.int64,) * 2
-            direct = kernel.overloads[sig].entry_point
-            packed = pack_structs(params, state, out)
-            packed_kernel(packed, actions, 0, 0)
-            sig = tuple(packed_kernel.typeof_pyval(x) for x in (packed, actions)) + (nb.types.int64,) * 2
-            packed_entry = packed_kernel.overloads[sig].entry_point
-        except Exception:  # noqa: BLE001 - an unexpected numba layout: the dispatcher (or the direct entry) serves
-            packed_entry, packed = None, None
-        if len(self.cache) >= self.SIZE:
-            self.cache.pop(next(iter(self.cache)))
-        hit = self.cache[key] = (direct, packed_entry, packed, params, state, out)
+        if hit is None or hit[1] is not params or hit[2] is not state or hit[3] is not out:
+            if len(self.cache) >= self.SIZE:
+                self.cache.pop(next(iter(self.cache)))
+            hit = self.cache[key] = ([], params, state, out, {})
+        packs = hit[0]
+        while len(packs) < count:
+            packs.append(pack_structs(params, state, out))
         return hit
+
+    @staticmethod
+    def _resolve(kernel, packed, extra: tuple):
+        try:
+            kernel(packed, *extra, 0, 0)  # compiles or loads it (no formation stepped)
+            sig = tuple(kernel.typeof_pyval(x) for x in (packed, *extra)) + (nb.types.int64,) * 2
+            return kernel.overloads[sig].entry_point
+        except Exception:  # noqa: BLE001 - an unexpected numba layout: the dispatcher serves
+            return kernel

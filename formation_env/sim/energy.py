@@ -55,7 +55,9 @@ def _path_drag(x, c, wind, v_air_b, ac):
     return -(fx * v_air_b[0] + fy * v_air_b[1] + fz * v_air_b[2])
 
 
-@_jit
+# inlined into energy_account_range at numba IR level: a compiled function of its own would be one more copy of the
+# ELL solve it calls for numba to link and re-optimise
+@nb.njit(cache=True, error_model="numpy", inline="always")
 def energy_account_one(wake, wake_alone, coupling, ac, x, cmd, ambient, ambient_omega, out):
     """The account (V, N_ENERGY) of one formation into ``out`` (see the module docstring). x (V, 16)
     states, cmd (V, 4) controls, ambient (V, 3) wind NED m/s, ambient_omega (V, 3) rotational gusts rad/s

@@ -44,10 +44,12 @@ __all__ = ["FieldScratch", "DecisionScratch", "field_scratch", "decision_scratch
            "formation_benefit", "formation_saving", "reward_output", "observe_one"]
 
 _jit = nb.njit(cache=True, error_model="numpy")
-# The stages called at every physics step are inlined into decide_one at numba IR level: as separate
+# The stages called at every physics step are inlined into the decision at numba IR level: as separate
 # compiled calls each one increfs and decrefs every array of the StepParams / SimState it is passed
-# (~100), which cost ~3.5 us per 2-UAV formation physics step (+30 % without the wake; measured against
-# the single-function decide_one of dffc3cc: 13.8 against 10.6 us, inlined 10.0 us, issue 21).
+# (~100), a cost comparable to a small formation's physics step (issue 21). So are the stages called once a
+# decision that only call further kernels (formation_saving, formation_benefit, observe_one): each compiled function links
+# and re-optimises everything it calls (numba), so a function of its own above the ELL solve is that solve
+# compiled once more.
 _jit_inline = nb.njit(cache=True, error_model="numpy", inline="always")
 QUAT0 = QUAT.start  # the attitude quaternion's first column (numba slices by integer constants)
 # A compiled call increfs and decrefs every array of its struct arguments (StepParams holds ~70,
@@ -416,7 +418,7 @@ def episode_flags(collision_separation_m, episode_steps, s, b, min_sep, crashed_
     return collided
 
 
-@_jit
+@_jit_inline
 def formation_benefit(p, s, b, amb, out_saving):
     """Induced-drag saving (V,) of formation b at its current state: one ELL solve at the current
     poses (relative to the ambient air), then Kutta-Joukowski drag against each UAV flying alone
@@ -433,12 +435,14 @@ def formation_benefit(p, s, b, amb, out_saving):
     speed, alpha, beta = np.empty(nv), np.empty(nv), np.empty(nv)
     ell_inputs(s.aircraft[b], amb, w.wing_origin_body, pos, euler, speed, alpha, beta)
     gamma = np.empty(w.panel_left_knot.shape[0])
+    # nothing kept (an empty keep, as None, but of the type formation_saving passes: one compiled ELL, not two)
+    no_keep = np.empty((0, 0))
     evaluate_formation(w, pos, euler, speed, alpha, beta, gamma, np.empty((gamma.shape[0], 3)), np.empty((nv, 3)),
-                       np.empty((nv, 3)), np.empty((nv, 3)), np.empty((nv, 3)))
-    induced_drag_saving_one(w, p.wake_alone, pos, euler, speed, alpha, beta, gamma, out_saving)
+                       np.empty((nv, 3)), np.empty((nv, 3)), np.empty((nv, 3)), no_keep)
+    induced_drag_saving_one(w, p.wake_alone, pos, euler, speed, alpha, beta, gamma, out_saving, AIR_DENSITY_SL, no_keep)
 
 
-@_jit
+@_jit_inline
 def formation_saving(p, s, b, crashed_any, solved_last, sc, o):
     """``o.saving[b]`` with the benefit on: 0 after a crash, read off the last substep's ELL solve
     (its poses and circulation) when there was one, else a fresh solve (:func:`formation_benefit`)."""
@@ -475,7 +479,7 @@ def reward_output(w, remaining, s, b, actions, chi_slot, collided, o):
             s.previous_action[b, a, k] = actions[a, k]
 
 
-@_jit
+@_jit_inline
 def observe_one(p, s, b, out_obs):
     """Observation rows (V, D) of formation b at its current state."""
     nv = s.aircraft.shape[1]

@@ -35,7 +35,7 @@ from __future__ import annotations
 import numba as nb
 import numpy as np
 
-from .dispatch import PARALLEL_MIN_BATCH, EntryPoints, run_chunks, threads
+from .dispatch import PARALLEL_MIN_BATCH, EntryPoints, run_chunks
 from .params import TURBULENCE_OFF, StepParams
 from .stages import (advance_turbulence, ambient_wind, control, crash_and_slot_error, decision_over, decision_scratch,
                      demands, episode_flags, field_scratch, formation_benefit, formation_saving, integrate_reference,
@@ -48,7 +48,14 @@ __all__ = ["step", "refresh", "observe", "PARALLEL_MIN_BATCH", "decide_one", "re
            "observe_one", "ENTRY_POINTS"]
 
 
-@nb.njit(cache=True, error_model="numpy")
+# decide_one and refresh_formation are inlined into the kernels below at numba IR level: numba links and
+# re-optimises everything a compiled function calls, so each compiled level above the decision (a function per
+# formation, a loop over formations, an entry on packed structs) compiled the whole decision again; one compiled
+# function per entry point compiles it once.
+_jit_inline = nb.njit(cache=True, error_model="numpy", inline="always")
+
+
+@_jit_inline
 def refresh_formation(p, s, b):
     """Demands and turbulence of formation b at its current state and time (after a reset)."""
     nv = s.aircraft.shape[1]
@@ -57,7 +64,7 @@ def refresh_formation(p, s, b):
         sample_turbulence(p.turbulence, p.field, s, b, field_scratch(nv), s.step[b] * p.dt_s)
 
 
-@nb.njit(cache=True, error_model="numpy")
+@_jit_inline
 def decide_one(p, s, b, actions, o):
     """One decision of formation b with ``actions`` (V, 4): substeps, then observation, reward and
     events into ``o`` (the stages: :mod:`formation_env.sim.stages`).
@@ -99,47 +106,47 @@ def decide_one(p, s, b, actions, o):
 
 
 @nb.njit(cache=True, nogil=True, error_model="numpy")
-def decide_range(p, s, actions, o, start, stop):
-    """:func:`decide_one` for formations start..stop-1 (releases the GIL: threads run chunks)."""
+def decide_packed(ps, actions, start, stop):
+    """:func:`decide_one` for formations start..stop-1, the (params, state, out) structs packed in ``ps`` (a
+    :class:`~formation_env.sim.dispatch.StepStructs`); releases the GIL (threads run chunks)."""
+    p, s, o = ps.p, ps.s, ps.o
     for b in range(start, stop):
         decide_one(p, s, b, actions[b], o)
 
 
 @nb.njit(cache=True, nogil=True, error_model="numpy")
-def decide_packed(ps, actions, start, stop):
-    """:func:`decide_range` on packed structs (:class:`~formation_env.sim.dispatch.StepStructs`): the same
-    compiled step, called with one pointer."""
-    decide_range(ps.p, ps.s, actions, ps.o, start, stop)
-
-
-@nb.njit(cache=True, nogil=True, error_model="numpy")
-def refresh_range(p, s, indices, observation, start, stop):
-    """:func:`refresh_formation` and :func:`observe_one` for indices[start:stop]."""
+def refresh_packed(ps, indices, start, stop):
+    """:func:`refresh_formation` and :func:`observe_one` for formations indices[start:stop] (structs as
+    :func:`decide_packed`'s)."""
+    p, s, o = ps.p, ps.s, ps.o
     for q in range(start, stop):
         b = indices[q]
         refresh_formation(p, s, b)
-        observe_one(p, s, b, observation[b])
+        observe_one(p, s, b, o.observation[b])
 
 
-#: the decision's entry points per Simulation (formation_env.sim.dispatch.EntryPoints)
-ENTRY_POINTS = EntryPoints(decide_range, decide_packed)
+#: the packed structs and resolved entry points per Simulation (formation_env.sim.dispatch.EntryPoints)
+ENTRY_POINTS = EntryPoints()
 
 
 def step(params: StepParams, state: SimState, actions: np.ndarray, out: StepOutput) -> StepOutput:
     """Advance every formation by one decision with ``actions`` (B, V, 4) in [-1, 1] (rows of
     PID-flown vehicles are ignored); results into ``out`` (returned). Inputs are not checked here:
     the env adapters validate once per decision."""
+    if not (isinstance(actions, np.ndarray) and actions.dtype == np.float64 and actions.ndim == 3
+            and actions.flags.c_contiguous and actions.flags.aligned and actions.flags.writeable):
+        actions = np.array(actions, dtype=np.float64, order="C")  # the one type the kernel is compiled for (read only)
     n = actions.shape[0]
-    serial = n < PARALLEL_MIN_BATCH or threads() <= 1  # (the threaded path takes the unpacked call: EntryPoints)
-    kernel, args = ENTRY_POINTS.get(params, state, actions, out, packed=serial)
+    kernel, args = ENTRY_POINTS.get(decide_packed, params, state, out, (actions,), n)
     run_chunks(kernel, n, args)
     return out
 
 
 def refresh(params: StepParams, state: SimState, indices: np.ndarray, out: StepOutput) -> None:
     """After resetting formations ``indices``: their demands, turbulence sample and observation."""
-    run_chunks(refresh_range, indices.shape[0], (params, state, np.ascontiguousarray(indices, dtype=np.int64),
-                                                  out.observation))
+    n = indices.shape[0]
+    kernel, args = ENTRY_POINTS.get(refresh_packed, params, state, out, (np.array(indices, dtype=np.int64),), n)
+    run_chunks(kernel, n, args)
 
 
 def observe(params: StepParams, state: SimState, out: StepOutput) -> np.ndarray:
