@@ -18,8 +18,8 @@ def run(args) -> int:
     if is_warm() and not args.force:
         print("formation-env: the kernel cache is warm (use --force to run the warm-up anyway)", file=sys.stderr)
         return 0
-    print("formation-env: compiling the simulation kernels (minutes on 2 cores, longer when other processes share "
-          "them; cached afterwards):",
+    print("formation-env: compiling the simulation kernels (about 3 minutes on 2 idle cores, longer when other "
+          "processes share them; cached afterwards):",
           file=sys.stderr, flush=True)
     total = warm_up(sys.stderr)
     print(f"formation-env: kernels ready in {total:.0f} s", file=sys.stderr)

@@ -1,9 +1,8 @@
 """Compile the kernels ahead of time, with progress, instead of silently on the first step.
 
 The kernels are numba functions cached on disk (``cache=True``: ``__pycache__`` beside each source file). A
-fresh clone has no cache, so its first simulation step compiles them: minutes on 2 cores, longer when other
-processes share the cores. ``make
-install`` runs :func:`warm_up` (``formation-env warmup``), so the first run after it is warm; and when a
+fresh clone has no cache, so its first simulation step compiles them: about 3 minutes on 2 idle cores, longer
+when other processes share the cores. ``make install`` runs :func:`warm_up` (``formation-env warmup``), so the first run after it is warm; and when a
 :class:`~formation_env.sim.Simulation` is built while the cache is cold (a stamp beside this module, written
 after a complete warm-up of the current sources, is missing or older than a source file), :func:`ensure_warm`
 says so on stderr and compiles stage by stage, naming each stage and how far it is.
