@@ -2,7 +2,7 @@
 
 numba caches each ``cache=True`` function keyed on its *own* source file only (numba 0.68: a hash of that file's
 bytes; earlier: its modification time). A compiled function that calls, or inlines, a kernel from another file --
-``decide_one`` (sim/step.py) inlines the stages of sim/stages.py and calls the ELL of wake/*.py -- is *not*
+``decide_packed`` (sim/step.py) inlines the stages of sim/stages.py and calls the ELL of wake/*.py -- is *not*
 recompiled when only that other file changes: the cached caller silently runs the old physics (measured: an edit
 of sim/stages.py left the cached decision step running the previous code). So the package keeps one fingerprint of
 the sources its kernels can depend on (the modules that import numba and everything of the package they import,

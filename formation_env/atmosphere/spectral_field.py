@@ -22,7 +22,7 @@ and a realisation's variance per axis varies less. The variance beyond k_max is 
 0.27 %, Dryden 0.02 %; below k_min < 1e-9): it decorrelates within centimetres, so it lowers 1 - rho
 at half a span by 12 % (von Karman) and the tests compare with the band's correlations
 (:func:`.spectral_theory.correlation_fg` with ``band``). A sample costs one :func:`sincos` per mode and
-aircraft (~6 ns: arithmetic, vectorised over the modes).
+aircraft (arithmetic only, so it vectorises over the modes).
 
 Taylor. The field is frozen in the air mass: a UAV at ground position x at time t samples u(x - W t),
 W the steady wind (NED), so every UAV samples the one field at its own position and any two points have

@@ -9,6 +9,9 @@ import sys
 def register(sub) -> None:
     p = sub.add_parser("warmup", help="compile the simulation kernels now (make install does; cached afterwards)")
     p.add_argument("--force", action="store_true", help="run the warm-up even when the cache is already warm")
+    p.add_argument("--processes", type=int, choices=(1, 2), default=None,
+                   help="2: the two decision steps compile in two processes at once (the default with two cores or "
+                        "more); 1: one stage after the other in this process")
     p.set_defaults(func=run)
 
 
@@ -19,10 +22,10 @@ def run(args) -> int:
     if is_warm() and not args.force:
         print("formation-env: the kernel cache is warm (use --force to run the warm-up anyway)", file=sys.stderr)
         return 0
-    print("formation-env: compiling the simulation kernels (minutes on 2 cores, longer when other processes share "
-          "them; cached afterwards):",
+    print("formation-env: compiling the simulation kernels (about 2 minutes on 2 idle cores, longer when other "
+          "processes share them; cached afterwards):",
           file=sys.stderr, flush=True)
-    total = warm_up(Simulation, sys.stderr)
+    total = warm_up(Simulation, sys.stderr, processes=args.processes)
     print(f"formation-env: kernels ready in {total:.0f} s", file=sys.stderr)
     return 0
 

@@ -34,6 +34,7 @@ from ..aircraft.kernels import aero_force_at, air_density_at
 from ..frames import quaternion_dcm_terms
 from ..wake.benefit import induced_drags_one
 from ..wake.coupling import coupled_wind
+from .dispatch import run_chunks
 from .kernels import ell_inputs
 
 __all__ = ["ENERGY_COLUMNS", "N_ENERGY", "energy_account_one", "energy_account_range", "energy_account"]
@@ -54,7 +55,9 @@ def _path_drag(x, c, wind, v_air_b, ac):
     return -(fx * v_air_b[0] + fy * v_air_b[1] + fz * v_air_b[2])
 
 
-@_jit
+# inlined into energy_account_range at numba IR level: a compiled function of its own would be one more copy of the
+# ELL solve it calls for numba to link and re-optimise
+@nb.njit(cache=True, error_model="numpy", inline="always")
 def energy_account_one(wake, wake_alone, coupling, ac, x, cmd, ambient, ambient_omega, out):
     """The account (V, N_ENERGY) of one formation into ``out`` (see the module docstring). x (V, 16)
     states, cmd (V, 4) controls, ambient (V, 3) wind NED m/s, ambient_omega (V, 3) rotational gusts rad/s
@@ -130,7 +133,5 @@ def energy_account_range(wake, wake_alone, coupling, ac, x, cmd, ambient, ambien
 
 def energy_account(wake, wake_alone, coupling, ac, x, cmd, ambient, ambient_omega, out) -> None:
     """:func:`energy_account_one` for every formation of a batch (arguments as :func:`energy_account_range`'s),
-    over the decision step's threads when that is faster (:func:`formation_env.sim.step._run_chunks`)."""
-    from .step import _run_chunks
-
-    _run_chunks(energy_account_range, x.shape[0], (wake, wake_alone, coupling, ac, x, cmd, ambient, ambient_omega, out))
+    over the decision step's threads when that is faster (:func:`formation_env.sim.dispatch.run_chunks`)."""
+    run_chunks(energy_account_range, x.shape[0], (wake, wake_alone, coupling, ac, x, cmd, ambient, ambient_omega, out))

@@ -102,7 +102,9 @@ def _clear_wake(held_wind, held_omega, gamma):
         gamma[j] = 0.0
 
 
-@_jit
+# inlined into its callers at numba IR level (the decision, step_range): as a compiled function of its own it was
+# one more copy of the ELL solve and the RK4 for numba to link and re-optimise
+@nb.njit(cache=True, error_model="numpy", inline="always")
 def step_one(state, controls, ambient, turb, turb_omega, held_wind, held_omega, gamma, update_wake, wake_on, wake,
              coupling, aircraft, dt, out_state, out_status, keep=None):
     """One formation (V aircraft) by one step dt: ELL induced wind when ``update_wake`` (held

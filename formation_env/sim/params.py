@@ -30,7 +30,8 @@ from .kernels import pack_limits
 __all__ = ["AircraftArrays", "WakeArrays", "ScenarioArrays", "ActionParams", "RewardParams", "StepParams",
            "ACTION_MODE_CODES", "wake_arrays", "scenario_arrays", "SURFACES", "RESIDUAL", "SETPOINTS", "safe_box_arrays",
            "setpoint_ranges", "safe_box_offsets", "setpoint_speed_range", "slot_error_axes", "surface_scale", "RESIDUAL_SCALE",
-           "TurbulenceParams", "TURBULENCE_CODES", "turbulence_params",
+           "TurbulenceParams", "TURBULENCE_CODES", "turbulence_params", "TURBULENCE_OFF", "TURBULENCE_LANES",
+           "TURBULENCE_INDEPENDENT", "TURBULENCE_SPECTRAL",
            "SETPOINT_POSITION_SCALE_M", "SETPOINT_SPEED_SCALE_MPS"]
 
 SURFACES, RESIDUAL, SETPOINTS = 0, 1, 2
@@ -173,8 +174,13 @@ class TurbulenceParams(NamedTuple):
     modes: SpectralFieldParams  # the spectral field (formation_env.atmosphere.spectral_field)
 
 
+# ``StepParams.turbulence``: which turbulence model the step samples (module-level ints: numba compiles them as
+# constants). Off; the lanes (cross-correlated, transport-delayed); independent lanes (each UAV its own stream, no
+# delay); the spectral field (von Karman or Dryden, with rotational gusts).
+TURBULENCE_OFF, TURBULENCE_LANES, TURBULENCE_INDEPENDENT, TURBULENCE_SPECTRAL = 0, 1, 2, 3
 #: ``EnvConfig.turbulence_field`` -> ``StepParams.turbulence`` when sigma > 0 ("frozen": the lanes' old name)
-TURBULENCE_CODES = {"von_karman": 3, "dryden": 3, "lanes": 1, "frozen": 1, "independent": 2}
+TURBULENCE_CODES = {"von_karman": TURBULENCE_SPECTRAL, "dryden": TURBULENCE_SPECTRAL, "lanes": TURBULENCE_LANES,
+                    "frozen": TURBULENCE_LANES, "independent": TURBULENCE_INDEPENDENT}
 
 
 class StepParams(NamedTuple):
@@ -185,7 +191,7 @@ class StepParams(NamedTuple):
     episode_steps: int  # physics steps until the time limit
     wake_on: bool
     wake_update_every: int  # physics steps between ELL solves
-    turbulence: int  # TURBULENCE_CODES: 0 off, 1 lanes, 2 independent streams per UAV, 3 spectral field
+    turbulence: int  # TURBULENCE_OFF | TURBULENCE_LANES | TURBULENCE_INDEPENDENT | TURBULENCE_SPECTRAL
     benefit_on: bool  # compute the induced-drag saving each decision
     aircraft: AircraftArrays
     wake: WakeArrays
@@ -320,5 +326,6 @@ def turbulence_params(sc, sigma_mps: float, field: str = "lanes") -> TurbulenceP
 
 @functools.lru_cache(maxsize=16)
 def _spectral_params(kind: str, sigma: float, length: float, dt: float) -> SpectralFieldParams:
-    # the shell tables take ~0.1 s of quadrature: built once per (spectrum, sigma, L, dt) in a process
+    # the shell tables are a quadrature, too slow to redo for every environment: built once per (spectrum, sigma,
+    # L, dt) in a process
     return spectral_field_params(kind, sigma, length, dt, span_m=AEROSONDE_SPAN_M, tail_arm_m=AEROSONDE_TAIL_ARM_M)

@@ -35,7 +35,7 @@ from ..wake.benefit import AIR_DENSITY_SL, induced_drag_saving_one
 from .guidance import formation_demands, gust_wind_ned, leader_wind, reference_path, schedule_features
 from .kernels import ell_inputs, min_separation_each, position_finite, separation_each_known, step_one, step_separation
 from .observe import box_depth_each, observe_formation, reward_formation, slot_error
-from .params import RESIDUAL, SETPOINTS, SURFACES
+from .params import RESIDUAL, SETPOINTS, SURFACES, TURBULENCE_LANES, TURBULENCE_OFF, TURBULENCE_SPECTRAL
 
 __all__ = ["FieldScratch", "DecisionScratch", "field_scratch", "decision_scratch", "ground_velocity_ned", "demands",
            "sample_turbulence", "ambient_wind", "setpoint_shift", "control", "physics_and_events",
@@ -44,10 +44,12 @@ __all__ = ["FieldScratch", "DecisionScratch", "field_scratch", "decision_scratch
            "formation_benefit", "formation_saving", "reward_output", "observe_one"]
 
 _jit = nb.njit(cache=True, error_model="numpy")
-# The stages called at every physics step are inlined into decide_one at numba IR level: as separate
+# The stages called at every physics step are inlined into the decision at numba IR level: as separate
 # compiled calls each one increfs and decrefs every array of the StepParams / SimState it is passed
-# (~100), which cost ~3.5 us per 2-UAV formation physics step (+30 % without the wake; measured against
-# the single-function decide_one of dffc3cc: 13.8 against 10.6 us, inlined 10.0 us, issue 21).
+# (~100), a cost comparable to a small formation's physics step (issue 21). So are the stages called once a
+# decision that only call further kernels (formation_saving, formation_benefit, observe_one): each compiled function links
+# and re-optimises everything it calls (numba), so a function of its own above the ELL solve is that solve
+# compiled once more.
 _jit_inline = nb.njit(cache=True, error_model="numpy", inline="always")
 QUAT0 = QUAT.start  # the attitude quaternion's first column (numba slices by integer constants)
 # A compiled call increfs and decrefs every array of its struct arguments (StepParams holds ~70,
@@ -156,22 +158,23 @@ def demands(scenario, s, b, t, vel):
 @_jit
 def sample_turbulence(turbulence, field, s, b, fs, t):
     """Turbulence of formation b at time t (s; the UAVs' current positions are there then), into
-    ``s.gust_ned[b]`` (V, 3) m/s NED and ``s.gust_omega_body[b]`` (V, 3) rad/s body: ``turbulence`` 3 the
-    spectral field (:mod:`formation_env.atmosphere.spectral_field`) at each UAV's CG, frozen in the air
-    moving with the steady wind, with its rotational gusts over the span and to the tail; 1 the lanes
-    (cross-correlated, transport-delayed); 2 independent lanes (each UAV its own stream, no delay); the
-    lanes have no rotational gusts (zero). Non-finite values (a diverged UAV, episode ending) read as 0.
+    ``s.gust_ned[b]`` (V, 3) m/s NED and ``s.gust_omega_body[b]`` (V, 3) rad/s body. ``turbulence``:
+    ``TURBULENCE_SPECTRAL`` the spectral field (:mod:`formation_env.atmosphere.spectral_field`) at each UAV's CG,
+    frozen in the air moving with the steady wind, with its rotational gusts over the span and to the tail;
+    ``TURBULENCE_LANES`` the lanes (cross-correlated, transport-delayed); ``TURBULENCE_INDEPENDENT`` independent
+    lanes (each UAV its own stream, no delay); the lanes have no rotational gusts (zero). Non-finite values (a
+    diverged UAV, episode ending) read as 0.
     ``field`` the :class:`~formation_env.sim.params.TurbulenceParams`, fs a :class:`FieldScratch`."""
     nv = s.gust_ned.shape[1]
     chi = math.atan2(s.velocity_demand[b, 0, 1], s.velocity_demand[b, 0, 0])
     if not math.isfinite(chi):
         chi = 0.0
-    if turbulence == 3:
+    if turbulence == TURBULENCE_SPECTRAL:
         x = s.aircraft[b]
         sample_modes_one(field.modes, s.modes, b, x[:, POS_N:POS_D + 1], x[:, QUAT0:QUAT0 + 4], t, s.steady_wind[b], chi,
                          s.gust_ned[b], s.gust_omega_body[b])
         return
-    if turbulence == 1:
+    if turbulence == TURBULENCE_LANES:
         pos = s.aircraft[:, :, POS_N:POS_D + 1]
         sample_field_one(field.lanes, s.field, b, pos, chi, s.gust_ned, fs.along, fs.cross, fs.down, fs.slot0,
                          fs.slot1, fs.frac, fs.corr, fs.lo, fs.gust)
@@ -299,9 +302,9 @@ def advance_turbulence(turbulence, field, s, b, fs):
     """The turbulence of formation b one step forward and sampled at the new positions (called after
     the physics step, before the step counter moves on: the new positions are at (step + 1) dt); the
     lanes advance their filters, the spectral field is frozen and only moves with the air. Nothing when
-    ``turbulence`` is 0. fs: a :class:`FieldScratch`."""
-    if turbulence != 0:
-        if turbulence != 3:
+    ``turbulence`` is ``TURBULENCE_OFF``. fs: a :class:`FieldScratch`."""
+    if turbulence != TURBULENCE_OFF:
+        if turbulence != TURBULENCE_SPECTRAL:
             advance_field_one(field.lanes, s.field, b, fs.normals)
         sample_turbulence(turbulence, field, s, b, fs, (s.step[b] + 1) * field.modes.dt_s)
 
@@ -415,7 +418,7 @@ def episode_flags(collision_separation_m, episode_steps, s, b, min_sep, crashed_
     return collided
 
 
-@_jit
+@_jit_inline
 def formation_benefit(p, s, b, amb, out_saving):
     """Induced-drag saving (V,) of formation b at its current state: one ELL solve at the current
     poses (relative to the ambient air), then Kutta-Joukowski drag against each UAV flying alone
@@ -432,12 +435,14 @@ def formation_benefit(p, s, b, amb, out_saving):
     speed, alpha, beta = np.empty(nv), np.empty(nv), np.empty(nv)
     ell_inputs(s.aircraft[b], amb, w.wing_origin_body, pos, euler, speed, alpha, beta)
     gamma = np.empty(w.n_panels)
+    # nothing kept (an empty keep, as None, but of the type formation_saving passes: one compiled ELL, not two)
+    no_keep = np.empty((0, 0))
     evaluate_formation(w, pos, euler, speed, alpha, beta, gamma, np.empty((gamma.shape[0], 3)), np.empty((nv, 3)),
-                       np.empty((nv, 3)), np.empty((nv, 3)), np.empty((nv, 3)))
-    induced_drag_saving_one(w, p.wake_alone, pos, euler, speed, alpha, beta, gamma, out_saving)
+                       np.empty((nv, 3)), np.empty((nv, 3)), np.empty((nv, 3)), no_keep)
+    induced_drag_saving_one(w, p.wake_alone, pos, euler, speed, alpha, beta, gamma, out_saving, AIR_DENSITY_SL, no_keep)
 
 
-@_jit
+@_jit_inline
 def formation_saving(p, s, b, crashed_any, solved_last, sc, o):
     """``o.saving[b]`` with the benefit on: 0 after a crash, read off the last substep's ELL solve
     (its poses and circulation) when there was one, else a fresh solve (:func:`formation_benefit`)."""
@@ -474,7 +479,7 @@ def reward_output(w, remaining, s, b, actions, chi_slot, collided, o):
             s.previous_action[b, a, k] = actions[a, k]
 
 
-@_jit
+@_jit_inline
 def observe_one(p, s, b, out_obs):
     """Observation rows (V, D) of formation b at its current state."""
     nv = s.aircraft.shape[1]

@@ -1,12 +1,12 @@
 """Compile the kernels ahead of time, with progress, instead of silently on the first step.
 
-The kernels are numba functions cached on disk (``cache=True``: ``__pycache__`` beside each source file). A
-fresh clone has no cache, so its first simulation step compiles them: minutes on 2 cores, longer when other
-processes share the cores. ``make
-install`` runs :func:`warm_up` (``formation-env warmup``), so the first run after it is warm; and when a
-:class:`~formation_env.sim.Simulation` is built while the cache is cold (a stamp beside this module, written
-after a complete warm-up of the current sources, is missing or older than a source file), :func:`ensure_warm`
-says so on stderr and compiles stage by stage, naming each stage and how far it is.
+The kernels are numba functions cached on disk (``cache=True``: ``__pycache__`` beside each source file). A fresh
+clone has no cache, so its first simulation step compiles them: about 2 minutes on 2 idle cores (two processes
+compile at once), longer when other processes share the cores. ``make install`` runs :func:`warm_up`
+(``formation-env warmup``), so the first run after it is warm; and when a :class:`~formation_env.sim.Simulation` is
+built while the cache is cold (a stamp beside this module, written after a complete warm-up of the current sources,
+is missing or older than a source file), :func:`ensure_warm` says so on stderr and compiles stage by stage, naming
+each stage and how far it is.
 
 ``FORMATION_ENV_NO_WARMUP=1`` turns the automatic warm-up off (the kernels then compile on first use, silently).
 
@@ -17,6 +17,7 @@ being built, or from the command), so that this module, which the simulation imp
 from __future__ import annotations
 
 import os
+import subprocess
 import sys
 import threading
 import time
@@ -61,25 +62,34 @@ def _wake(simulation) -> None:
     formation_benefit(model, st)
 
 
-def _decision_step(simulation) -> None:
+def _decision_thesis(simulation) -> None:
     import numpy as np
 
     from .config import EnvConfig, Randomisation
 
-    # one configuration exercises every branch type of the step (turbulence, benefit, set-points, a formation)
+    # one configuration exercises every branch type of the step with the thesis's wake (turbulence, benefit,
+    # set-points, a formation); a one-UAV task flies the same compiled step
     cfg = EnvConfig(scenario="formation_keeping", action_mode="setpoints", compute_benefit=True, duration_s=0.2,
                     randomisation=Randomisation(turbulence_sigma_mps=1.0))
     sim = simulation(cfg, batch_size=2)
     sim.reset(seeds=[0, 1])
     sim.step(np.zeros((2, sim.n_agents, 4)))
-    # an energy task: the load-weighted coupling and the energy account of its infos (issue 23)
-    energy = simulation(EnvConfig(scenario="close_formation", compute_benefit=True, duration_s=0.2), batch_size=1)
-    energy.reset(seeds=[0])
-    energy.step(np.zeros((1, energy.n_agents, 4)))
-    energy.info.energy_account  # noqa: B018  (computed when read: compiles the energy kernels)
     solo = simulation(EnvConfig(scenario="tracking", duration_s=0.2), batch_size=1)
     solo.reset(seeds=[0])
     solo.step(np.zeros((1, solo.n_agents, 4)))
+
+
+def _decision_energy(simulation) -> None:
+    import numpy as np
+
+    from .config import EnvConfig
+
+    # the energy tasks' wake (the sheet law and the residual table: switches by type, so a second compiled step),
+    # and the energy account of their infos (computed when read)
+    energy = simulation(EnvConfig(scenario="close_formation", compute_benefit=True, duration_s=0.2), batch_size=1)
+    energy.reset(seeds=[0])
+    energy.step(np.zeros((1, energy.n_agents, 4)))
+    energy.info.energy_account  # noqa: B018
 
 
 def _control(simulation) -> None:
@@ -100,8 +110,13 @@ def _control(simulation) -> None:
 #: (what compiles, function of the Simulation class): in the order the first run needs them
 STAGES = (("Aerosonde aerodynamics, propulsion and trim", _aircraft),
           ("ELL wake solve and loads", _wake),
-          ("the batched decision step (guidance, PID, wake, RK4, turbulence, reward, observation)", _decision_step),
-          ("the thesis PID as a stand-alone policy", _control))
+          ("the batched decision step with the thesis's wake (guidance, PID, wake, RK4, turbulence, reward, "
+           "observation)", _decision_thesis),
+          ("the thesis PID as a stand-alone policy", _control),
+          ("the batched decision step with the energy tasks' wake, and the energy account", _decision_energy))
+#: the stage a second process compiles while this one compiles the others: the two decision steps are about
+#: half of the compile time each and share no compiled function, so two cores compile them at the same time
+SECOND_PROCESS_STAGE = len(STAGES) - 1
 
 
 class _Heartbeat:
@@ -131,24 +146,54 @@ class _Heartbeat:
             self._thread.join()
 
 
-def warm_up(simulation, stream=sys.stderr) -> float:
+def _second_process() -> subprocess.Popen:
+    """Start compiling :data:`SECOND_PROCESS_STAGE` in a new interpreter importing this same package (its own
+    automatic warm-up off); numba writes what it compiles to the shared cache."""
+    env = dict(os.environ, FORMATION_ENV_NO_WARMUP="1",
+               PYTHONPATH=os.pathsep.join(p for p in (str(_PACKAGE.parent), os.environ.get("PYTHONPATH")) if p))
+    code = ("from formation_env.sim import Simulation; from formation_env.sim.warmup import STAGES, "
+            f"SECOND_PROCESS_STAGE; STAGES[SECOND_PROCESS_STAGE][1](Simulation)")
+    return subprocess.Popen([sys.executable, "-c", code], env=env, stdin=subprocess.DEVNULL,
+                            stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
+
+
+def warm_up(simulation, stream=sys.stderr, processes: int | None = None) -> float:
     """Compile (or load from the cache) every kernel, reporting each stage on ``stream`` (None: silent); writes
     the stamp :func:`is_warm` reads. ``simulation``: the :class:`~formation_env.sim.Simulation` class the decision
-    step's stage flies. Returns the seconds it took."""
+    step's stages fly. ``processes``: 2 compiles :data:`SECOND_PROCESS_STAGE` in a second process at the same
+    time as the other stages (then loads it from the cache here, which also compiles whatever that process did
+    not finish); 1 compiles everything here, one stage after the other; None: 2 when the machine has two cores or
+    more. Returns the seconds it took."""
     global _BUSY
+    if processes is None:
+        processes = 2 if (os.cpu_count() or 1) >= 2 else 1
+    if processes not in (1, 2):
+        raise ValueError(f"warm_up: processes must be 1 or 2, got {processes!r}")
     t0 = time.perf_counter()
     _BUSY = True
+    second = _second_process() if processes == 2 else None
     try:
         for k, (what, fn) in enumerate(STAGES, 1):
             t = time.perf_counter()
             if stream is not None:
-                print(f"  [{k}/{len(STAGES)}] compiling {what} ...", file=stream, flush=True)
+                where = " (in a second process since the start)" if second is not None and k - 1 == \
+                    SECOND_PROCESS_STAGE else ""
+                print(f"  [{k}/{len(STAGES)}] compiling {what}{where} ...", file=stream, flush=True)
             with _Heartbeat(stream, k, len(STAGES)):
+                if second is not None and k - 1 == SECOND_PROCESS_STAGE:
+                    _, err = second.communicate()
+                    if second.returncode != 0 and stream is not None:  # compiled here instead, below
+                        print(f"  [{k}/{len(STAGES)}] the second process failed (compiling here instead): "
+                              f"{err.decode(errors='replace').strip().splitlines()[-1:]}", file=stream, flush=True)
+                    second = None
                 fn(simulation)
             if stream is not None:
                 print(f"  [{k}/{len(STAGES)}] done in {time.perf_counter() - t:.1f} s", file=stream, flush=True)
     finally:
         _BUSY = False
+        if second is not None:  # a stage before it failed: nothing waits for the second process any more
+            second.kill()
+            second.wait()
     try:
         _STAMP.parent.mkdir(parents=True, exist_ok=True)
         _STAMP.write_text(f"warm-up {time.strftime('%Y-%m-%d %H:%M:%S')}\n")

@@ -50,10 +50,13 @@ CORE_PEAK = 0.71635
 _TINY_H = 1e-12  # below this distance a point lies on the branch line: no contribution
 _MIN_CORE_M = 1e-9
 
-_jit = nb.njit(cache=True, fastmath=False, error_model="numpy")
-# The per-branch laws run ~2,000 times per formation solve: inlined at numba IR level (LLVM did not
-# inline the cored variants into the field and AIC loops, which slowed every solve).
-_jit_inline = nb.njit(cache=True, fastmath=False, error_model="numpy", inline="always")
+# forceinline=False: a kernel compiled for one of the laws below must not inherit their forceinline
+_jit = nb.njit(cache=True, fastmath=False, error_model="numpy", forceinline=False)
+# The per-branch laws run ~2,000 times per formation solve: always inlined (LLVM's own cost model left the cored
+# variants as calls in the field and AIC loops, which slowed a solve). Inlined by LLVM (``forceinline``: the
+# alwaysinline attribute) rather than at numba IR level (``inline="always"``): numba's IR inliner reruns its front
+# end at every call site, which was most of the wake's compile time; the operations and their order are the same.
+_jit_inline = nb.njit(cache=True, fastmath=False, error_model="numpy", forceinline=True)
 
 
 @_jit

@@ -35,9 +35,10 @@ __all__ = ["KMAX", "N_ROWS", "lane_scratch", "load_knots", "vehicle_knot_ranges"
            "own_field_lanes", "own_field_bounds"]
 
 _jit = nb.njit(cache=True, fastmath=False, error_model="numpy")
-# the per-control-point scalar parts, inlined into the assembly's loop (a call passing their ~10 arrays is a large
-# share of a small formation's solve); the lane loops stay functions of their own, where LLVM vectorises them
-_jit_inline = nb.njit(cache=True, fastmath=False, error_model="numpy", inline="always")
+# the per-control-point scalar parts, inlined into the assembly's loop (a call passing their ~10 arrays was a sizeable
+# part of a 2-UAV solve); the lane loops stay functions of their own, where LLVM vectorises them. Inlined by LLVM
+# (forceinline), not at numba IR level: see formation_env.wake.biot_savart's _jit_inline
+_jit_inline = nb.njit(cache=True, fastmath=False, error_model="numpy", forceinline=True)
 _TINY2 = _TINY_H * _TINY_H  # the laws' "point on the branch line" test, h^2 < _TINY_H^2
 
 #: knots per formation a row of the scratch holds (vee9: 99); a lattice with more takes the scalar assembly

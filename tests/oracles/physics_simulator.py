@@ -135,7 +135,7 @@ class FormationSimulator:
     def _step_compiled(self, state, controls, amb, turb) -> StepResult:
         """The same step in compiled code (:func:`formation_env.sim.kernels.step_one` per formation,
         formations on the decision step's thread pool)."""
-        from formation_env.sim.step import _run_chunks
+        from formation_env.sim.dispatch import run_chunks
 
         b, v = self.batch_size, self.n_vehicles
         m = self._kernel_model
@@ -145,7 +145,7 @@ class FormationSimulator:
             self._held_gamma = np.zeros((b, m.n_panels))
         out = np.empty((b, v, N_STATES))
         status = np.empty((b, v), dtype=np.int64)
-        _run_chunks(step_range, b, (np.ascontiguousarray(state), np.ascontiguousarray(controls), np.ascontiguousarray(amb),
+        run_chunks(step_range, b, (np.ascontiguousarray(state), np.ascontiguousarray(controls), np.ascontiguousarray(amb),
                                     np.ascontiguousarray(turb), self._held_wind, self._held_omega, self._held_gamma, update,
                                     self.wake_model is not None, self._wake, self._aircraft, self.dt, out, status))
         gamma = self._held_gamma.copy() if self.wake_model is not None else None

@@ -1,7 +1,7 @@
 """The decision's Python-side shortcuts (issue 26, single env): each must give exactly what the general path
-gives. The compiled entry point resolved once per Simulation (formation_env.sim.step._EntryPoints) against
-numba's dispatcher; the infos' compiled separations against separation_each; the adapters' fast action check
-against the general one."""
+gives. The packed structs and the compiled entry point resolved once per Simulation
+(formation_env.sim.dispatch.EntryPoints) against numba's dispatcher; the infos' compiled separations against
+separation_each; the adapters' fast action check against the general one."""
 
 import numpy as np
 import pytest
@@ -10,7 +10,10 @@ import formation_env
 import formation_env.sim.step as step_mod
 from formation_env.envs.parallel import check_action
 from formation_env.sim import EnvConfig, Randomisation, Simulation
+from formation_env.sim.dispatch import EntryPoints, StepStructs, pack_structs
 from formation_env.sim.infos import separation_each
+
+DECIDE = step_mod.decide_packed
 
 
 def _sim():
@@ -20,18 +23,16 @@ def _sim():
 
 
 def _step_three(a, b, c, act):
-    """a through the packed structs' entry point, c through the direct (unpacked) entry point, b through numba's
-    dispatcher (a Fortran-ordered actions array never takes a fast path): bit for bit the same."""
+    """a through the resolved entry point with the first thread's packed structs, c with the last thread's
+    (structs of their own), b through numba's dispatcher on structs packed anew: bit for bit the same."""
     for sim in (a, b, c):
         sim._actions[:, sim.agent_mask] = act
-    kernel, args = step_mod._ENTRY.get(a.params, a.state, a._actions, a.output, packed=True)
-    kernel(*args, 0, 2)
-    kernel, args = step_mod._ENTRY.get(c.params, c.state, c._actions, c.output, packed=False)
-    assert args[0] is c.params and kernel is not step_mod.decide_range
-    kernel(*args, 0, 2)
-    fortran = np.asfortranarray(b._actions)
-    assert step_mod._ENTRY.get(b.params, b.state, fortran, b.output)[0] is step_mod.decide_range
-    step_mod.step(b.params, b.state, fortran, b.output)
+    kernel, args = step_mod.ENTRY_POINTS.get(DECIDE, a.params, a.state, a.output, (a._actions,), 2)
+    assert kernel is not DECIDE and args[0][1] is a._actions
+    kernel(*args[0], 0, 2)
+    kernel, args = step_mod.ENTRY_POINTS.get(DECIDE, c.params, c.state, c.output, (c._actions,), 2)
+    kernel(*args[-1], 0, 2)
+    DECIDE(pack_structs(b.params, b.state, b.output), b._actions, 0, 2)
     for other in (b, c):
         for name in ("observation", "reward", "terminated", "truncated", "separation_m", "slot_error_m"):
             assert np.array_equal(getattr(a.output, name), getattr(other.output, name)), name
@@ -45,19 +46,21 @@ def test_entry_points_step_bit_for_bit_as_the_dispatcher():
     rng = np.random.default_rng(3)
     for _ in range(6):
         _step_three(a, b, c, rng.uniform(-1, 1, size=(2, a.n_agents, 4)))
-    kernel, args = step_mod._ENTRY.get(a.params, a.state, a._actions, a.output)
-    assert kernel is not step_mod.decide_range  # the fast path was taken for the Simulation's own arrays
-    assert isinstance(args[0], step_mod.StepStructs) and args[1] is a._actions
-    again = step_mod._ENTRY.get(a.params, a.state, a._actions, a.output)
-    assert again[0] is kernel and again[1][0] is args[0]  # packed and resolved once
+    kernel, args = step_mod.ENTRY_POINTS.get(DECIDE, a.params, a.state, a.output, (a._actions,), 2)
+    assert isinstance(args[0][0], StepStructs)
+    again = step_mod.ENTRY_POINTS.get(DECIDE, a.params, a.state, a.output, (a._actions,), 2)
+    assert again[0] is kernel and again[1][0][0] is args[0][0]  # packed and resolved once
+    two = step_mod.ENTRY_POINTS.structs(a.params, a.state, a.output, 2)
+    assert len(two) >= 2 and two[0] is not two[1] and two[0] is args[0][0]  # a thread's structs are its own
     # the packed structs share the Simulation's arrays: what Python writes afterwards (a reset of one formation,
     # the state written in place) is what the packed step reads, and what it writes is what Python reads
     for sim in (a, b, c):
         sim.reset(indices=[1], seeds=[99])
     for _ in range(4):
         _step_three(a, b, c, rng.uniform(-1, 1, size=(2, a.n_agents, 4)))
-    assert step_mod._ENTRY.get(a.params, a.state, a._actions, a.output)[1][0] is args[0]
-    # Simulation.step itself (serial or threaded, whichever this machine's settings give) agrees too
+    assert step_mod.ENTRY_POINTS.get(DECIDE, a.params, a.state, a.output, (a._actions,), 2)[1][0][0] is args[0][0]
+    # Simulation.step itself (serial or threaded, whichever this machine's settings give) agrees too, and so does
+    # step() given actions of another layout (converted to the kernel's one array type)
     d = _sim()
     d.reset(seeds=[11, 12])
     e = _sim()
@@ -71,21 +74,22 @@ def test_entry_points_step_bit_for_bit_as_the_dispatcher():
 
 
 def test_entry_point_cache_is_bounded_and_checks_identity():
-    cache = step_mod._EntryPoints()
+    cache = EntryPoints()
     sims = [_sim() for _ in range(cache.SIZE + 2)]
     for s in sims:
         s.reset(seeds=[1, 2])
-        cache.get(s.params, s.state, s._actions, s.output)
+        cache.get(DECIDE, s.params, s.state, s.output, (s._actions,), 2)
     assert len(cache.cache) == cache.SIZE
     s = sims[-1]
     key = (id(s.params), id(s.state), id(s.output))
-    direct, entry, packed, params, state, out = cache.cache[key]
+    packs, params, state, out, entries = cache.cache[key]
     assert params is s.params and state is s.state and out is s.output
-    assert cache.get(s.params, s.state, s._actions, s.output, packed=False) == (direct, (params, state, s._actions, out))
-    # an object at a cached id but not the cached object (as after garbage collection) is resolved anew
-    cache.cache[key] = ("stale", "stale", None, object(), state, out)
-    kernel, args = cache.get(s.params, s.state, s._actions, s.output)
-    assert kernel == entry and args[0] is not packed
+    entry, args = cache.get(DECIDE, s.params, s.state, s.output, (s._actions,), 1)
+    assert entry is entries[DECIDE] and args == [(packs[0], s._actions)]
+    # an object at a cached id but not the cached object (as after garbage collection) is packed anew
+    cache.cache[key] = (["stale"], object(), state, out, {})
+    entry, args = cache.get(DECIDE, s.params, s.state, s.output, (s._actions,), 1)
+    assert isinstance(args[0][0], StepStructs) and entry is not DECIDE
 
 
 def test_info_separations_equal_separation_each_bit_for_bit():

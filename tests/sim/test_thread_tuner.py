@@ -1,4 +1,4 @@
-"""The decision step's serial/threaded tuner (formation_env.sim.step._ThreadTuner): it picks the faster
+"""The decision step's serial/threaded tuner (formation_env.sim.dispatch.ThreadTuner): it picks the faster
 setting, re-measures the other one rarely while threads run (each re-measurement is a whole call in the
 slower setting: the decision-time spikes of issue 26), backs off while serial is confirmed, and follows a
 change of the machine. Kernels here are Python functions whose wall time is set by sleeping (which
@@ -8,7 +8,7 @@ import time
 
 import pytest
 
-import formation_env.sim.step as step
+import formation_env.sim.dispatch as dispatch
 
 
 class _Kernel:
@@ -26,7 +26,7 @@ class _Kernel:
 
 @pytest.fixture
 def two_threads(monkeypatch):
-    monkeypatch.setattr(step, "_threads", lambda: 2)
+    monkeypatch.setattr(dispatch, "threads", lambda: 2)
 
 
 def _calls(tuner, kernel, n_calls):
@@ -37,16 +37,16 @@ def _calls(tuner, kernel, n_calls):
 
 
 def test_threaded_faster_is_kept_without_serial_spikes(two_threads):
-    tuner = step._ThreadTuner()
+    tuner = dispatch.ThreadTuner()
     k = _Kernel(8, per_row=3e-3)  # serial 24 ms, threaded ~12 ms: a 12 ms margin over scheduling noise on a busy machine
     serial = list(_calls(tuner, k, 200))
     assert serial[:5] == [True, False, True, False, True]  # the warm-up measures both
     assert not any(serial[5:])  # then threads only: no serial re-measurement within EXPLORE_MAX calls
-    assert step._ThreadTuner.EXPLORE_MAX > 200
+    assert dispatch.ThreadTuner.EXPLORE_MAX > 200
 
 
 def test_serial_faster_backs_off_its_remeasurements(two_threads):
-    tuner = step._ThreadTuner()
+    tuner = dispatch.ThreadTuner()
     k = _Kernel(8, per_row=0.0, per_call=6e-3)  # every chunk pays the per-call cost: threaded (~12 ms) is slower
     serial = list(_calls(tuner, k, 240))
     threaded_after_warmup = [i + 1 for i, s in enumerate(serial) if not s and i >= 5]
@@ -55,7 +55,7 @@ def test_serial_faster_backs_off_its_remeasurements(two_threads):
 
 
 def test_follows_the_machine_when_threads_get_slower(two_threads):
-    tuner = step._ThreadTuner()
+    tuner = dispatch.ThreadTuner()
     # timings a few times the scheduling noise of a busy 2-core machine (another test process beside this one)
     k = _Kernel(8, per_row=3e-3)
     list(_calls(tuner, k, 20))
