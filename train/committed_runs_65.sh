@@ -74,7 +74,7 @@ jobs_list | selected | while read -r algo task _ seed; do  # ONLY: publish the r
   if [ ! -f "$run/best_model.zip" ]; then  # every validation had a collision: the selection rule chose no model
     extra+=(--model final --note "every validation of the run had a collision: the final model")
   fi
-  "$PY" -m train.publish "$run" "${task}_${algo}_setpoints_seed${seed}" --wall-s "$wall" ${extra[@]+"${extra[@]}"} \
+  "$FE" publish run "$run" "${task}_${algo}_setpoints_seed${seed}" --wall-s "$wall" ${extra[@]+"${extra[@]}"} \
     < /dev/null
 done
 [ -n "${NO_EVAL:-}" ] && exit 0
