@@ -12,7 +12,7 @@ EXTRAS ?= test,distributed,compat
 TEST_WORKERS ?= 2
 OUT    ?=
 
-.PHONY: demo test bench verify report clean install
+.PHONY: demo test bench bench-peers verify report clean install
 
 $(VENV)/bin/python:
 	$(PYTHON) -m venv $(VENV)
@@ -35,6 +35,16 @@ test: $(STAMP)
 
 bench: $(STAMP)
 	$(VENV)/bin/formation-env bench
+
+# The peers (VMAS, PyFlyt) in a virtual environment of their own (PyFlyt needs numpy < 2), timed in the same run as
+# formation-env's cases: `formation-env bench --peers --peer-python PATH` (docs/performance.md is this run's JSON).
+PEERS_VENV ?= .venv-peers
+$(PEERS_VENV)/bin/python:
+	$(PYTHON) -m venv $(PEERS_VENV)
+	$(PEERS_VENV)/bin/python -m pip install --quiet -c constraints.txt "numpy<2" torch vmas PyFlyt
+
+bench-peers: $(STAMP) $(PEERS_VENV)/bin/python
+	$(VENV)/bin/formation-env bench --json --peers --peer-python $(PEERS_VENV)/bin/python $(if $(OUT),> $(OUT),)
 
 verify: $(STAMP)
 	$(VENV)/bin/formation-env verify

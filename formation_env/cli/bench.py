@@ -23,6 +23,11 @@ def register(sub) -> None:
                    help="an older checkout (its repository root) to measure in the same session: ratios new/old")
     p.add_argument("--no-busy", dest="busy", action="store_false",
                    help="skip the runs with a competing busy process")
+    p.add_argument("--peers", action="store_true",
+                   help="also time the peers' environments (VMAS flocking, PyFlyt dogfight) where installed")
+    p.add_argument("--peer-python", default=None, metavar="PATH",
+                   help="the interpreter the peers are installed in, e.g. a virtual environment of their own "
+                        "(default: this one; `make bench-peers` makes one)")
     p.add_argument("--rllib", action="store_true",
                    help="instead: RLlib env steps/s sampled with 1 and 2 env runners (needs the 'distributed' extra)")
     p.add_argument("--runners", type=nonneg_int, nargs="+", default=None, help="env runner counts for --rllib (default 1 2)")
@@ -40,6 +45,10 @@ def run(args) -> int:
                             ("--envs-per-runner", args.envs_per_runner), ("--address", args.address)) if v is not None]
     if given:
         raise ValueError(f"{', '.join(given)}: only with --rllib")
+    if args.peer_python is not None and not args.peers:
+        raise ValueError("--peer-python: only with --peers")
+    if args.peer_python is not None and not (os.path.isfile(args.peer_python) and os.access(args.peer_python, os.X_OK)):
+        raise ValueError(f"--peer-python {args.peer_python!r}: not an executable file (a Python interpreter)")
     if args.baseline is not None and not os.path.isdir(os.path.join(args.baseline, "formation_env")):
         raise ValueError(f"--baseline {args.baseline!r}: not a checkout (no formation_env/ inside)")
     results = {"machine": {"cpus": os.cpu_count(), "python": platform.python_version(), "platform": platform.platform()}}
@@ -57,6 +66,11 @@ def run(args) -> int:
                                                     log=lambda line: log(f"{k}/{len(modules)} {line}"))
         else:
             results[key] = module.run_benchmarks(quick=args.quick)
+    if args.peers:
+        from ..envs.bench import run_peers
+
+        log("peers ...")
+        results["peers"] = run_peers(args.peer_python, quick=args.quick)
     log("done")
     if args.json:
         print(json.dumps(results, indent=2))
@@ -89,8 +103,13 @@ def print_human(results: dict) -> None:
 
         print(f"environments ({envs['case']}):")
         print(format_table(envs))
+    peers = results.get("peers")
+    if peers:
+        from ..envs.bench import format_peers
+
+        print(format_peers(peers))
     for key, value in results.items():
-        if key not in ("machine", "wake", "envs"):
+        if key not in ("machine", "wake", "envs", "peers"):
             print(f"{key}:")
             print("  " + json.dumps(value, indent=2).replace("\n", "\n  "))
 

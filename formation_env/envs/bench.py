@@ -16,7 +16,7 @@ import sys
 import tempfile
 from pathlib import Path
 
-__all__ = ["run_benchmarks", "BATCH_SIZES", "SINGLE_CASES", "TURBULENCE_CASES", "FORMATION_SIZE_CASES"]
+__all__ = ["run_benchmarks", "run_peers", "BATCH_SIZES", "SINGLE_CASES", "TURBULENCE_CASES", "FORMATION_SIZE_CASES"]
 
 PEERS = {
     "PyFlyt 2-aircraft dogfight (joint steps/s)": 408,
@@ -156,6 +156,47 @@ def run_benchmarks(quick: bool = False, baseline: str | None = None, busy: bool 
             rows[_key(case)] = row
         out["configurations"][name] = rows
     return out
+
+
+def run_peers(python: str | None = None, quick: bool = False) -> dict:
+    """The peers' environments (:mod:`formation_env.envs.bench_peers`) timed with the interpreter ``python`` (None:
+    this one), 2 and 1 threads, nothing competing: {"python": ..., "threads=N": [row per peer]}."""
+    python = python or sys.executable
+    budget, repeats = (0.2, 2) if quick else (0.6, 3)
+    out: dict = {"python": python}
+    src = Path(__file__).with_name("bench_peers.py")
+    with tempfile.TemporaryDirectory() as tmp:
+        script = Path(tmp) / "bench_peers_script.py"
+        shutil.copy(src, script)  # run outside the package: the peers' interpreter need not have formation_env
+        for threads in (2, 1):
+            env = dict(os.environ, OMP_NUM_THREADS=str(threads), MKL_NUM_THREADS=str(threads))
+            env.pop("PYTHONPATH", None)
+            proc = subprocess.run([python, str(script), json.dumps({"budget_s": budget, "repeats": repeats,
+                                                                   "threads": threads})],
+                                  env=env, cwd=tmp, capture_output=True, text=True)
+            if proc.returncode != 0:
+                raise RuntimeError(f"bench peers ({python}) failed:\n{proc.stderr[-2000:]}")
+            out[f"threads={threads}"] = json.loads(proc.stdout.strip().splitlines()[-1])
+    return out
+
+
+def format_peers(peers: dict) -> str:
+    """Text lines of :func:`run_peers` results."""
+    lines = [f"peers, measured in this run ({peers['python']}):"]
+    confs = [k for k in peers if k.startswith("threads=")]
+    for i, row in enumerate(peers[confs[0]]):
+        cells = []
+        for c in confs:
+            r = peers[c][i]
+            if "unsupported" in r:
+                cells.append(f"{c}: {r['unsupported']}")
+            elif "env_steps_per_s" in r:
+                cells.append(f"{c}: {r['env_steps_per_s']:,.0f} env-steps/s ({r['agent_steps_per_s']:,.0f} agent-steps/s)")
+            else:
+                cells.append(f"{c}: {r['joint_steps_per_s']:,.0f} joint steps/s")
+        version = f" {row['version']}" if "version" in row else ""
+        lines.append(f"  {row['peer']}{version}, {row['case']}: " + "; ".join(cells))
+    return "\n".join(lines)
 
 
 def format_table(res: dict) -> str:

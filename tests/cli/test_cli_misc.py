@@ -122,3 +122,10 @@ def test_allow_scenario_mismatch_flies_when_the_sizes_agree(tmp_path, capsys):
     assert main(argv) == 2 and "'wake_surfing'" in capsys.readouterr().err
     assert main([*argv, "--allow-scenario-mismatch"]) == 0
     assert (tmp_path / "e" / "results.json").is_file()
+
+
+def test_bench_peer_python_needs_peers_and_an_interpreter(capsys, tmp_path):
+    assert main(["bench", "--peer-python", "/usr/bin/env"]) == 2
+    assert "--peer-python: only with --peers" in capsys.readouterr().err
+    assert main(["bench", "--peers", "--peer-python", str(tmp_path / "nope")]) == 2
+    assert "not an executable file" in capsys.readouterr().err

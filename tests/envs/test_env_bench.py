@@ -76,3 +76,82 @@ def test_formation_size_cases_count_every_uav_and_table_their_scaling():
     table = bench.format_table(res)
     assert f"{head} 0.40x (0.50x close_formation's), 3,200 decisions/s |" in table
     assert "close_formation: UAV physics steps/s over" not in table
+
+
+def _fake_peers(monkeypatch):
+    """Stand-ins with the peers' APIs (vmas.make_env; PyFlyt.pz_envs.MAFixedwingDogfightEnvV2) counting the steps."""
+    import sys
+    import types
+
+    import torch
+
+    calls = {"vmas": 0, "pyflyt": 0}
+
+    class VmasEnv:
+        agents = [types.SimpleNamespace(u_range=1.0) for _ in range(4)]
+
+        def reset(self):
+            return None
+
+        def step(self, actions):
+            assert len(actions) == 4 and tuple(actions[0].shape) == (1024, 2)
+            calls["vmas"] += 1
+
+    class Dogfight:
+        possible_agents = ["uav_0", "uav_1"]
+
+        def __init__(self, team_size, agent_hz):
+            assert team_size == 1 and agent_hz == 30
+            self.agents = list(self.possible_agents)
+
+        def action_space(self, agent):
+            return types.SimpleNamespace(low=-np.ones(4), high=np.ones(4))
+
+        def reset(self, seed=None):
+            self.agents = list(self.possible_agents)
+
+        def step(self, actions):
+            assert set(actions) == set(self.agents)
+            calls["pyflyt"] += 1
+            return {}, {}, {a: False for a in self.agents}, {a: False for a in self.agents}, {}
+
+        def close(self):
+            pass
+
+    vmas = types.SimpleNamespace(make_env=lambda scenario, **kw: VmasEnv(), __version__="fake")
+    pyflyt = types.ModuleType("PyFlyt")
+    pz_envs = types.ModuleType("PyFlyt.pz_envs")
+    pz_envs.MAFixedwingDogfightEnvV2 = Dogfight
+    monkeypatch.setitem(sys.modules, "vmas", vmas)
+    monkeypatch.setitem(sys.modules, "PyFlyt", pyflyt)
+    monkeypatch.setitem(sys.modules, "PyFlyt.pz_envs", pz_envs)
+    monkeypatch.setattr(torch, "set_num_threads", lambda n: None)
+    return calls
+
+
+def test_peers_are_timed_through_their_own_apis(monkeypatch):
+    from formation_env.envs import bench_peers
+
+    calls = _fake_peers(monkeypatch)
+    rows = bench_peers.measure(budget_s=0.01, repeats=2, threads=1)
+    vm, pf = rows
+    assert vm["peer"] == "VMAS flocking" and "unsupported" not in vm and calls["vmas"] > 5
+    assert np.isclose(vm["env_steps_per_s"], 1024 * vm["batch_steps_per_s"])
+    assert np.isclose(vm["agent_steps_per_s"], 4 * vm["env_steps_per_s"])
+    assert pf["peer"] == "PyFlyt fixed-wing dogfight" and pf["aircraft"] == 2 and pf["joint_steps_per_s"] > 0
+    assert calls["pyflyt"] > 5
+    text = bench.format_peers({"python": "py", "threads=2": rows, "threads=1": rows})
+    assert "VMAS flocking fake" in text and "env-steps/s" in text and "joint steps/s" in text
+
+
+def test_peers_not_installed_are_reported_not_raised():
+    """This interpreter has neither peer (the dev install does not pull them): each row says so, in a real
+    subprocess run of the script, as `formation-env bench --peers` would."""
+    out = bench.run_peers(quick=True)
+    for conf in ("threads=2", "threads=1"):
+        rows = out[conf]
+        assert [r["peer"] for r in rows] == ["VMAS flocking", "PyFlyt fixed-wing dogfight"]
+        for r in rows:
+            importable = __import__("importlib").util.find_spec("vmas" if "VMAS" in r["peer"] else "PyFlyt")
+            assert ("unsupported" in r) == (importable is None)
+    assert "not installed" in bench.format_peers(out)
