@@ -32,9 +32,9 @@ jobs_list() {
     echo "sac close_formation 700000 $seed"
     echo "sac vee5 575000 $seed"
     echo "sac reconfiguration 700000 $seed"
-    echo "recurrent_ppo close_formation 2000000 $seed"
-    echo "recurrent_ppo vee5 1000000 $seed"
-    echo "recurrent_ppo reconfiguration 2000000 $seed"
+    echo "recurrent_ppo close_formation 1500000 $seed"
+    echo "recurrent_ppo vee5 700000 $seed"
+    echo "recurrent_ppo reconfiguration 1500000 $seed"
   done
 }
 selected() {
