@@ -9,10 +9,11 @@ meaning). :class:`ObservationLayout` is the one value the rest of the package pa
 :meth:`ObservationLayout.slice` and :meth:`ObservationLayout.split` instead of computing offsets.
 
 Adding an observation group touches the compiled kernel that computes it (``sim/observe.py``; an optional group's
-switch is a ``StepParams`` field, ``sim/params.py``, that ``sim/stages.py`` hands to the kernel), its numpy oracle
-(``tests/oracles/env_step.py``), its declaration here and, for an optional group, the EnvConfig field of its switch
-(``sim/config.py``; its check is generic): the Simulation, the envs, the agents, evaluation, training, sidecars,
-replay and the documentation's groups table read the layout and stay as they are.
+switch is read by its place in the switches tuple the step carries, :meth:`ObservationLayout.switch_flags`), its
+numpy oracle (``tests/oracles/env_step.py``), its declaration here and, for an optional group, the EnvConfig field
+of its switch (``sim/config.py``; its check is generic): the step's parameters and stages, the Simulation, the envs,
+the agents, evaluation, training, sidecars, replay and the documentation's groups table pass the layout along and
+stay as they are.
 
 This module is plain Python on purpose: no compiled kernel imports it, so editing it recompiles nothing
 (:mod:`formation_env.kernel_cache`).
@@ -35,9 +36,9 @@ MAX_NEIGHBOURS = 64
 @dataclass(frozen=True)
 class ObservationGroup:
     """One observation group. ``size``: its values (per observed neighbour when ``per_neighbour``); ``option``: the
-    EnvConfig switch (a bool field of the same name, also the kernel's ``StepParams`` flag) that adds it, None for a
-    group every observation holds; ``scaling``, ``unit``, ``meaning``: its documentation (the groups table of
-    docs/environments.md is generated from them)."""
+    EnvConfig switch (a bool field of the same name; the kernel reads it by its place in :data:`OPTIONS`) that adds
+    it, None for a group every observation holds; ``scaling``, ``unit``, ``meaning``: its documentation (the groups
+    table of docs/environments.md is generated from them)."""
 
     name: str
     size: int
@@ -208,8 +209,13 @@ class ObservationLayout:
         return {_BY_NAME[n].option: True for n in self.optional}
 
     def switches(self) -> dict[str, bool]:
-        """Every optional group's switch, True or False (the kernel's ``StepParams`` flags)."""
+        """Every optional group's switch, True or False, by its EnvConfig name."""
         return {g.option: g.name in self.optional for g in GROUPS if g.option}
+
+    def switch_flags(self) -> tuple[bool, ...]:
+        """Every optional group's switch in :data:`OPTIONS` order: what the compiled step carries
+        (``StepParams.observation_switches``) and the kernel reads by place."""
+        return tuple(g.name in self.optional for g in GROUPS if g.option)
 
     def _fixed(self, what: str) -> int:
         if self.neighbours is None:

@@ -22,6 +22,11 @@ __all__ = ["observe_formation", "reward_formation", "REWARD_TERMS", "OBS_CLIP", 
 
 _jit = nb.njit(cache=True, error_model="numpy")
 
+# the optional groups' places in observe_formation's ``switches`` tuple: formation_env.sim.layout.OPTIONS's order
+# (StepParams.observation_switches, from ObservationLayout.switch_flags(); a test holds the two equal)
+NEIGHBOUR_WIND_SWITCH = 0
+NEIGHBOUR_ATTITUDE_SWITCH = 1
+
 OBS_CLIP = 10.0
 OMEGA_REF = 545.0  # rad/s, engine shaft speed scale
 SCHEDULE_SIZE = 10
@@ -56,17 +61,20 @@ def signed_log(x, scale):
 
 @_jit
 def observe_formation(x, induced, omega, amb, pd, vd, prev, schedule, cstate, trim_airspeed, altitude, air_params,
-                      vel, chi, out, neighbour_count=0, neighbour_wind=False, neighbour_attitude=False):
+                      vel, chi, out, neighbour_count, switches):
     """Observation rows (V, D) of one formation into ``out``. x (V, 16); induced, amb (V, 3) NED m/s;
     omega (V, 3) body rad/s; pd, vd (V, 3) demands; prev (V, 4); schedule (V, 10); cstate (V, 7);
     vel (V, 3), chi (V,) scratch. ``neighbour_count`` 0: the neighbours group holds every other UAV in
     index order; k > 0: the k UAVs whose demanded positions (slots) are nearest the agent's, nearest first
     (ties by index), and :data:`ABSENT_NEIGHBOUR_M` behind for each of the k that the formation lacks.
-    ``neighbour_wind``: then the ``neighbour_wind`` group, each observed neighbour's ambient wind minus the
-    agent's own (the neighbours' order; slot frame; zero for a missing one). ``neighbour_attitude``: then the
+    ``switches``: a bool per optional group (:data:`formation_env.sim.layout.OPTIONS` order). Neighbour wind
+    on: then the ``neighbour_wind`` group, each observed neighbour's ambient wind minus the
+    agent's own (the neighbours' order; slot frame; zero for a missing one). Neighbour attitude on: then the
     ``neighbour_attitude`` group, each observed neighbour's roll / 0.5 rad, roll rate (rad/s) and pitch minus the
     agent's / 0.5 rad (the neighbours' order; zero for a missing one)."""
     nv = x.shape[0]
+    neighbour_wind = switches[NEIGHBOUR_WIND_SWITCH]
+    neighbour_attitude = switches[NEIGHBOUR_ATTITUDE_SWITCH]
     wind = np.zeros(12)
     for a in range(nv):
         xa = x[a]
@@ -284,28 +292,3 @@ def reward_formation(w, error, previous_error, action, previous_action, saving, 
         out[a, 8] = -w.box * (1.0 + _huber(depth_scales)) if box_depth[a] > 0.0 else 0.0
         in_hold = remaining_decisions <= w.hold_remaining[a]
         out[a, 9] = -w.hold if (w.hold > 0.0 and in_hold and not err < w.hold_radius_m) else 0.0
-
-
-def group_sizes(n_vehicles: int, neighbour_count: int | None = None, neighbour_wind: bool = False,
-                neighbour_attitude: bool = False) -> dict[str, int]:
-    """Size of each observation group (formation_env.envs.observations documents them), for V UAVs
-    (``neighbour_count`` k: k neighbours observed, whatever V; ``neighbour_wind``: their ambient winds too;
-    ``neighbour_attitude``: their roll, roll rate and relative pitch too)."""
-    n = n_vehicles - 1 if not neighbour_count else int(neighbour_count)
-    sizes = {"air_data": 3, "attitude": 3, "rates": 3, "altitude": 1, "slot_position_error": 3,
-             "slot_velocity_error": 3, "induced_wind": 3, "induced_rotation": 3, "ambient_wind": 3, "engine": 1,
-             "previous_action": 4, "slot_schedule": SCHEDULE_SIZE, "controller_state": CONTROLLER_STATE_SIZE,
-             "neighbours": 6 * n}
-    if neighbour_wind:
-        sizes["neighbour_wind"] = 3 * n
-    if neighbour_attitude:
-        sizes["neighbour_attitude"] = 3 * n
-    return sizes
-
-
-def observation_size(n_vehicles: int, neighbour_count: int | None = None, neighbour_wind: bool = False,
-                     neighbour_attitude: bool = False) -> int:
-    """Length D of one UAV's flat observation vector in a formation of V UAVs (with ``neighbour_count`` k:
-    the same as in a formation of k + 1 UAVs observing all, whatever V; ``neighbour_wind`` and
-    ``neighbour_attitude`` add 3 per observed neighbour each)."""
-    return sum(group_sizes(n_vehicles, neighbour_count, neighbour_wind, neighbour_attitude).values())

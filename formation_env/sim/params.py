@@ -204,8 +204,9 @@ class StepParams(NamedTuple):
     trim_airspeed_mps: float
     coupling: CouplingArrays  # how the wake reaches the 6-DOF (formation_env.wake.coupling)
     neighbour_count: int = 0  # observed neighbours: 0 every other UAV in index order; k the k nearest by slot
-    neighbour_wind: bool = False  # the observed neighbours' ambient winds in the observation too
-    neighbour_attitude: bool = False  # and their roll, roll rate and relative pitch
+    # a bool per optional observation group, in formation_env.sim.layout.OPTIONS order
+    # (ObservationLayout.switch_flags()): whether the observation holds it
+    observation_switches: tuple = ()
 
 
 def surface_scale(limit_rad: float) -> np.ndarray:

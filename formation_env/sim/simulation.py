@@ -170,7 +170,7 @@ class Simulation:
             fcs=fcs_params(fc, sc.dt), action=self._action_params(config), reward=self._reward_params(config),
             field=turbulence_params(sc, sigma, config.turbulence_field), trim_airspeed_mps=float(sc.airspeed_mps),
             coupling=coupling_arrays(lattice, self.wake_coupling, AEROSONDE), neighbour_count=self.neighbour_count,
-            **self.observation_layout.switches())
+            observation_switches=self.observation_layout.switch_flags())
         self.obs_size = self.observation_layout.size
         # the memory the batch needs, from one formation's arrays, checked before the batch's are allocated
         one = _batch_arrays(init_state(1, v, lattice.n_panels, self.params.field), init_output(1, v, self.obs_size))

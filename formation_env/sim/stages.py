@@ -490,4 +490,4 @@ def observe_one(p, s, b, out_obs):
     observe_formation(s.aircraft[b], s.induced_wind_ned[b], s.induced_omega_body[b], amb, s.position_demand[b],
                       s.velocity_demand[b], s.previous_action[b], sched, s.controller[b], p.trim_airspeed_mps,
                       p.scenario.altitude_m, p.aircraft.scalars, np.empty((nv, 3)), np.empty(nv), out_obs,
-                      p.neighbour_count, p.neighbour_wind, p.neighbour_attitude)
+                      p.neighbour_count, p.observation_switches)

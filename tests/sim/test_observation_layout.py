@@ -14,18 +14,29 @@ from formation_env.sim.layout import GROUPS, OPTIONS, ObservationLayout
 REPO = Path(__file__).resolve().parents[2]
 
 
-@pytest.mark.parametrize("n_vehicles", [1, 2, 3, 5, 9])
-@pytest.mark.parametrize("neighbour_count", [None, 0, 1, 2])
-def test_the_declaration_gives_the_kernels_sizes(n_vehicles, neighbour_count):
-    """Every switch combination: the declared groups and sizes are the compiled observation's (sim.observe)."""
-    from formation_env.sim.observe import group_sizes
+@pytest.mark.parametrize("scenario, n_vehicles", [("tracking", 1), ("formation_keeping", 2), ("echelon3", 3),
+                                                  ("vee5", 5)])
+@pytest.mark.parametrize("neighbour_count", [None, 1, 2])
+def test_the_declaration_gives_the_sizes_the_kernel_fills(scenario, n_vehicles, neighbour_count):
+    """Every switch combination: the compiled observation fills exactly the declared length (an output prefilled
+    with NaN has none left after a reset; the values are the oracle's, tests/tasks/test_n_uav_formations.py)."""
+    from formation_env.sim import EnvConfig, Simulation
 
     for bits in range(2 ** len(OPTIONS)):
         switches = {o: bool(bits >> i & 1) for i, o in enumerate(OPTIONS)}
         layout = ObservationLayout.of(n_vehicles, neighbour_count, switches)
-        assert layout.groups == group_sizes(n_vehicles, neighbour_count, *switches.values())
         assert layout.options == {o: True for o, on in switches.items() if on}
         assert layout.switches() == switches
+        if n_vehicles == 1 and (neighbour_count or any(switches.values())):
+            continue  # one UAV has no neighbours to observe
+        sim = Simulation(EnvConfig(scenario=scenario, neighbour_count=neighbour_count, **switches), batch_size=1)
+        if neighbour_count is not None:  # None: the scenario's own count (vee5's 2 nearest)
+            assert sim.observation_layout == layout
+        layout = sim.observation_layout
+        assert layout.switches() == switches and sim.obs_size == layout.size
+        sim.output.observation[:] = np.nan
+        obs = sim.reset(seeds=[0]).observation
+        assert obs.shape == (1, n_vehicles, layout.size) and np.isfinite(obs).all()
 
 
 def test_a_simulation_owns_the_layout_of_its_observations():
@@ -131,3 +142,16 @@ def test_the_layout_is_plain_python_and_its_switches_are_config_options():
         assert o in fields and o in ENV_KEYS
         with pytest.raises(ValueError, match=f"{o} must be True or False"):
             EnvConfig(**{o: 1})
+
+
+def test_the_kernel_reads_each_switch_at_its_place_in_the_declared_order():
+    """The compiled observation reads an optional group's switch by its place in layout.OPTIONS (the tuple
+    StepParams carries), so adding a group passes through the step's parameters and stages unchanged."""
+    from formation_env.sim import EnvConfig, Simulation, observe
+
+    assert OPTIONS.index("neighbour_wind") == observe.NEIGHBOUR_WIND_SWITCH
+    assert OPTIONS.index("neighbour_attitude") == observe.NEIGHBOUR_ATTITUDE_SWITCH
+    layout = ObservationLayout(2, ("neighbour_attitude",))
+    assert layout.switch_flags() == tuple(o == "neighbour_attitude" for o in OPTIONS)
+    sim = Simulation(EnvConfig(scenario="echelon3", neighbour_attitude=True), batch_size=1)
+    assert sim.params.observation_switches == sim.observation_layout.switch_flags() == (False, True)

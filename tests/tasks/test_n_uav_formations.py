@@ -10,7 +10,7 @@ import formation_env
 from formation_env.sim.config import EnvConfig, Randomisation
 from formation_env.scenarios import get_scenario
 from formation_env.sim import Simulation
-from formation_env.sim.observe import observation_size
+from formation_env.envs.observations import observation_size
 from formation_env.tasks import get_task
 from formation_env.tasks.close_formation import optimum as two_ship
 from formation_env.tasks.n_uav_formations import optimum as opt
