@@ -21,6 +21,15 @@ AGENT_HZ = 30  # PyFlyt's default decision rate
 PEERS = (("VMAS flocking", "1,024 envs x 4 agents, CPU"), ("PyFlyt fixed-wing dogfight", "2 aircraft (team_size=1)"))
 
 
+def _version(distribution: str) -> str:
+    from importlib import metadata
+
+    try:
+        return metadata.version(distribution)
+    except metadata.PackageNotFoundError:  # imported from a source tree, not installed
+        return "?"
+
+
 def _timed(step, budget_s: float, repeats: int) -> float:
     """Median steps/s of ``repeats`` windows of about ``budget_s`` seconds each (after a few untimed steps)."""
     for _ in range(3):
@@ -49,7 +58,7 @@ def vmas_flocking(budget_s: float, repeats: int, threads: int, envs: int = 1024,
     actions = [(torch.rand((envs, 2), generator=gen) * 2 - 1) * env.agents[0].u_range for _ in env.agents]
     rate = _timed(lambda: env.step(actions), budget_s, repeats)
     return {"env_steps_per_s": rate * envs, "agent_steps_per_s": rate * envs * agents, "batch_steps_per_s": rate,
-            "envs": envs, "agents": agents, "torch": torch.__version__, "version": getattr(vmas, "__version__", "?")}
+            "envs": envs, "agents": agents, "torch": torch.__version__, "version": _version("vmas")}
 
 
 def pyflyt_dogfight(budget_s: float, repeats: int, threads: int) -> dict:
@@ -69,10 +78,8 @@ def pyflyt_dogfight(budget_s: float, repeats: int, threads: int) -> dict:
 
     rate = _timed(step, budget_s, repeats)
     env.close()
-    import PyFlyt
-
     return {"joint_steps_per_s": rate, "aircraft": len(env.possible_agents), "agent_hz": AGENT_HZ,
-            "version": getattr(PyFlyt, "__version__", "?")}
+            "version": _version("PyFlyt")}
 
 
 def measure(budget_s: float, repeats: int, threads: int) -> list[dict]:
