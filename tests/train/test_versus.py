@@ -65,3 +65,28 @@ def test_versus_a_success_rate():
     lv = versus(rec, "reconfiguration_new_setpoints", "reconfiguration_old_setpoints", n_boot=500)["levels"]["sigma_1"]
     assert lv["difference"] == pytest.approx(0.5) and lv["better"]
     assert lv["paired"]["candidate_rate"] == 1.0 and lv["paired"]["baseline_rate"] == 0.5
+
+
+def test_the_results_page_shows_each_versus_record_of_a_task(tmp_path):
+    from formation_env.tasks import get_task
+    from train.publish.results_page import versus_markdown
+    from train.publish.versus import versus
+
+    rng = np.random.default_rng(1)
+    base = rng.uniform(0.4, 0.8, 40)
+    rec = _record("close_formation", "harvest_ratio", [base + 0.03 + rng.normal(0, 0.01, 40) for _ in range(3)],
+                  [base + rng.normal(0, 0.01, 40) for _ in range(3)])
+    rec["by_level"]["sigma_1"]["episodes"] = {k.replace("_new_", "_sac_").replace("_old_", "_ppo_"): v
+                                              for k, v in rec["by_level"]["sigma_1"]["episodes"].items()}
+    out = versus(rec, "close_formation_sac_setpoints", "close_formation_ppo_setpoints", n_boot=300)
+    task = get_task("close_formation")
+    assert versus_markdown(task, tmp_path) == []  # no record: no section
+    (tmp_path / "close_formation_sac_setpoints_versus_ppo.json").write_text(json.dumps(out))
+    other = dict(out, task="vee5")  # another task's record under a misleading name is not shown
+    (tmp_path / "close_formation_td3_setpoints_versus_ppo.json").write_text(json.dumps(other))
+    lines = versus_markdown(task, tmp_path)
+    rows = [ln for ln in lines if ln.startswith("| SAC |")]
+    lv = out["levels"]["sigma_1"]
+    assert len(rows) == 1 and "close_formation_td3" not in "\n".join(lines)
+    assert f"{lv['difference']:+.3f} [{lv['difference_ci'][0]:+.3f}, {lv['difference_ci'][1]:+.3f}]" in rows[0]
+    assert rows[0].startswith(f"| SAC | sigma 1 | {lv['candidate_mean']:.3f} | {lv['reference_mean']:.3f} |")

@@ -125,7 +125,40 @@ def results_markdown(data: dict | None = None) -> tuple[str, dict]:
             if sigma == ev.headline_level:
                 summary[name] = {"task": task, "rows": rows, "best": best, "sigma": sigma}
                 parts += absolute_markdown(task, data)
+        parts += versus_markdown(task)
     return "\n".join(parts).rstrip() + "\n", summary
+
+
+def versus_markdown(task, policies: Path | None = None) -> list[str]:
+    """The task's recipes paired against PPO (``formation-env publish versus`` records,
+    ``<task>_<algo>_setpoints_versus_ppo.json``): per level the difference in the headline metric (seed-averaged,
+    paired by episode) with its 95 % interval, and the probability that a run of the one beats a run of the other on
+    an episode. No section where the task has none."""
+    from formation_env.tasks import HEADLINE_METRICS
+
+    folder = POLICIES if policies is None else policies
+    files = sorted(folder.glob(f"{task.name}_*_versus_ppo.json"))
+    records = [(f, json.loads(f.read_text(encoding="utf-8"))) for f in files]
+    records = [(f, r) for f, r in records if r.get("task") == task.name]
+    if not records:
+        return []
+    metric = HEADLINE_METRICS[task.evaluation.metric][0]
+    lines = ["### Against PPO", "",
+             f"Each recipe's three training seeds against PPO's on the same held-out episodes: the {metric} averaged "
+             "over the seeds episode by episode, the difference (recipe minus PPO) with its paired bootstrap 95 % "
+             "interval, and the probability that a run of the recipe does better than a run of PPO on an episode "
+             "(stratified bootstrap interval). Records: " + ", ".join(
+                 f"`{f.name}` (sha256 {_digest(f)})" for f, _ in records) + ".", "",
+             "| recipe | level | recipe | PPO | difference [95 % CI] | P(recipe better) [95 % CI] |",
+             "|---|---|---|---|---|---|"]
+    for f, r in records:
+        label = _label(r["candidate"], task.name)
+        for level, v in sorted(r["levels"].items(), key=lambda kv: kv[1]["turbulence_sigma_mps"]):
+            poi = v["probability_of_improvement"]
+            lines.append(f"| {label} | sigma {v['turbulence_sigma_mps']:g} | {v['candidate_mean']:.3f} | "
+                         f"{v['reference_mean']:.3f} | {v['difference']:+.3f} [{v['difference_ci'][0]:+.3f}, "
+                         f"{v['difference_ci'][1]:+.3f}] | {poi['value']:.2f} [{poi['ci'][0]:.2f}, {poi['ci'][1]:.2f}] |")
+    return lines + [""]
 
 
 def readme_table(summary: dict) -> str:
