@@ -16,6 +16,7 @@
 from __future__ import annotations
 
 import dataclasses
+import json
 import re
 import sys
 from pathlib import Path
@@ -114,8 +115,34 @@ def _randomisation(r) -> str:
     return ", ".join(items) if items else "none"
 
 
-def task_page(task, notes: dict[str, str], results: frozenset = frozenset()) -> str:
-    """The page of one task (markdown); ``results``: the task names the results page has a section for."""
+def _versus_lines(task, versus: list[dict]) -> list[str]:
+    """What the task's recipe-against-PPO records (``formation-env publish versus``) say at the headline level, one
+    sentence each, the verdict read off the paired interval."""
+    from ..tasks.base import HEADLINE_METRICS
+
+    ev = task.evaluation
+    labels = {"sac": "SAC", "recurrent_ppo": "recurrent PPO", "td3": "TD3", "mappo": "MAPPO"}
+    lines = []
+    for r in versus:
+        level = next((v for v in r["levels"].values() if v["turbulence_sigma_mps"] == ev.headline_level), None)
+        if level is None:
+            continue
+        algo = r["candidate"][len(task.name) + 1:].rsplit("_", 1)[0]
+        name = labels.get(algo, algo)
+        lo, hi = level["difference_ci"]
+        verdict = (f"{name} is better (the interval is clear of zero)" if level["better"] else
+                   "PPO is better (the interval is clear of zero)" if (lo > 0 if not ev.higher_is_better else hi < 0)
+                   else "no difference is shown (the interval holds zero)")
+        lines.append(f"* {name} against PPO, 3 training seeds each on the same {level['n_episodes']} held-out episodes "
+                     f"at sigma {ev.headline_level:g} m/s: {HEADLINE_METRICS[ev.metric][0]} {level['candidate_mean']:.3f} "
+                     f"against {level['reference_mean']:.3f}, paired difference {level['difference']:+.3f} "
+                     f"[{lo:+.3f}, {hi:+.3f}]: {verdict}.")
+    return lines
+
+
+def task_page(task, notes: dict[str, str], results: frozenset = frozenset(), versus: list[dict] | None = None) -> str:
+    """The page of one task (markdown); ``results``: the task names the results page has a section for;
+    ``versus``: the task's recipe-against-PPO records."""
     from ..sim.layout import ObservationLayout
     from ..tasks.base import HEADLINE_METRICS
 
@@ -209,6 +236,9 @@ def task_page(task, notes: dict[str, str], results: frozenset = frozenset()) -> 
     else:
         sec["Results"] += ["No policy or baseline record is committed for this task yet: the "
                            "[Results](../results.md) page lists those that are."]
+    if versus and _versus_lines(task, versus):
+        sec["Results"] += ["", "Other algorithms against PPO (every level: [Results, against PPO]"
+                           f"(../results.md#{task.name})):", "", *_versus_lines(task, versus)]
     title = task.name.replace("_", " ").capitalize()
     out = [HEADER.format(name=task.name) + f"# {title} (`{task.name}`)", ""]
     for s in SECTIONS:
@@ -298,7 +328,14 @@ def render_pages(root: Path) -> dict[Path, str]:
     res = docs / "results.md"
     results = frozenset(re.findall(r"(?m)^## ([a-z0-9_]+)\s*$", res.read_text(encoding="utf-8"))) if res.is_file() \
         else frozenset()
-    pages = {docs / "tasks" / f"{name}.md": task_page(t, _notes(docs / "tasks" / "notes" / f"{name}.md", name), results)
+    policies = root / "train" / "policies"
+
+    def versus(name: str) -> list[dict]:  # the records of formation-env publish versus, data beside the policies
+        records = [json.loads(f.read_text(encoding="utf-8")) for f in sorted(policies.glob(f"{name}_*_versus_ppo.json"))]
+        return [r for r in records if r.get("task") == name]
+
+    pages = {docs / "tasks" / f"{name}.md": task_page(t, _notes(docs / "tasks" / "notes" / f"{name}.md", name), results,
+                                                      versus(name))
              for name, t in TASKS.items()}
     pages[docs / "tasks" / "index.md"] = tasks_index(TASKS.values())
     env = docs / "environments.md"
