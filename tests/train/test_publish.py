@@ -123,7 +123,9 @@ def test_publish_best_or_final_model(tmp_path, monkeypatch):
     run.mkdir()
     (run / "config.yaml").write_text(yaml.safe_dump({"command": "cmd", "config": {"seed": 3}}))
     env = {"algo": "ppo", "scenario": "vee5", "action_mode": "setpoints", "control_hz": 10.0}
-    (run / "best_model.json").write_text(json.dumps({**env, "num_timesteps": 100, "validation": {"score": -0.5}}))
+    stamp = {"task": "vee5", "task_version": 1, "departures": {}}  # what the trainer stamps (train.config.task_stamp)
+    (run / "best_model.json").write_text(json.dumps({**env, **stamp, "num_timesteps": 100,
+                                                     "validation": {"score": -0.5}}))
     (run / "final_model.json").write_text(json.dumps({**env, "num_timesteps": 200}))
     (run / "evaluations.json").write_text(json.dumps([{"num_timesteps": 100, "score": -0.5},
                                                       {"num_timesteps": 200, "score": float("inf")}]))
@@ -132,6 +134,7 @@ def test_publish_best_or_final_model(tmp_path, monkeypatch):
     publish.publish(run, "a_seed3")
     assert (out / "a_seed3.zip").read_bytes() == b"best"
     assert json.loads((out / "a_seed3.json").read_text())["num_timesteps"] == 100
+    assert json.loads((out / "a_seed3.json").read_text())["env"] == {**env, **stamp}  # the task version carried
     publish.publish(run, "b_seed3", model="final", note="no collision-free validation")
     meta = json.loads((out / "b_seed3.json").read_text())
     assert (out / "b_seed3.zip").read_bytes() == b"final"

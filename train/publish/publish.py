@@ -48,7 +48,9 @@ def publish(run_dir: str | Path, name: str, *, eval_json: str | Path | None = No
         "env": {**{k: best[k] for k in ("algo", "scenario", "action_mode", "control_hz")},
                 **({"action_guard": best["action_guard"]} if best.get("action_guard") else {}),
                 **({"residual_on": best["residual_on"]} if best.get("residual_on") else {}),
-                **{k: best[k] for k in ("observation", *OBSERVATION_OPTIONS) if best.get(k)}},
+                **{k: best[k] for k in ("observation", *OBSERVATION_OPTIONS) if best.get(k)},
+                # the task and version it was trained on, and how the run departed from its benchmark configuration
+                **{k: best[k] for k in ("task", "task_version", "departures") if k in best}},
         "command": cfg.get("command"),
         "seed": c["seed"],
         "num_timesteps": best["num_timesteps"],
