@@ -103,13 +103,20 @@ def test_a_sidecar_without_a_layout_gets_the_one_its_options_give():
 
 
 def test_the_committed_policies_load_with_the_plain_layout():
-    """The sidecars in train/policies/ predate recorded layouts and set no observation option: plain observations."""
+    """Every committed policy observes the plain groups (no optional one, no task group): a sidecar without a recorded
+    layout reads as the unfixed plain layout; one with it (``observation``) as that layout, the task's own."""
     from train.evaluation.policy_loader import policy_layout, policy_metadata
 
     zips = sorted((REPO / "train" / "policies").glob("*.zip"))
     assert zips
     for z in zips:
-        assert policy_layout(policy_metadata(z)) == ObservationLayout(), z.name
+        meta = policy_metadata(z)
+        layout = policy_layout(meta)
+        recorded = meta.get("observation")
+        if recorded is None:
+            assert layout == ObservationLayout(), z.name
+        else:
+            assert layout.optional == () and layout.extra == () and layout.to_dict() == recorded, z.name
 
 
 def test_fit_finds_the_neighbours_from_the_length():
