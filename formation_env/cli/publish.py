@@ -118,7 +118,7 @@ def register(sub) -> None:
     vs.add_argument("record", metavar="RECORD.json", help="a one-task levels record (publish levels) holding both")
     vs.add_argument("candidate", metavar="CANDIDATE", help="a seed group, e.g. close_formation_sac_setpoints")
     vs.add_argument("reference", metavar="REFERENCE", help="a seed group, e.g. close_formation_ppo_setpoints")
-    vs.add_argument("out", metavar="OUT.json", help="the comparison's JSON")
+    vs.add_argument("out_json", metavar="OUT.json", help="the comparison's JSON")
     vs.add_argument("--overwrite", action="store_true", help="replace OUT.json")
     vs.set_defaults(func=run_versus)
 
@@ -174,7 +174,7 @@ def run_records(args) -> int:
 def run_versus(args) -> int:
     from train.publish.versus import write_versus
 
-    result = write_versus(args.record, args.candidate, args.reference, args.out, overwrite=args.overwrite)
+    result = write_versus(args.record, args.candidate, args.reference, args.out_json, overwrite=args.overwrite)
     for level, r in result["levels"].items():
         print(f"{level}: {result['metric']} {args.candidate} - {args.reference} = {r['difference']:+.4f} "
               f"[{r['difference_ci'][0]:+.4f}, {r['difference_ci'][1]:+.4f}], P(improvement) "

@@ -54,6 +54,8 @@ def test_versus_pairs_the_episodes_of_the_headline_metric(tmp_path, capsys):
     assert main(["publish", "versus", str(path), "close_formation_sac_setpoints", old, str(tmp_path / "p.json")]) == 2
     assert "no policy close_formation_sac_setpoints_seed<k>" in capsys.readouterr().err
     assert main(["publish", "versus", str(path), new, old, str(tmp_path / "o.json")]) == 2
+    assert "refusing to overwrite existing file" in capsys.readouterr().err
+    assert main(["publish", "versus", str(path), new, old, str(tmp_path / "o.json"), "--overwrite"]) == 0
 
 
 def test_versus_a_success_rate():

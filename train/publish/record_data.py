@@ -53,6 +53,9 @@ def _levels(task: str, file: str, key: str, index: int, sigmas=(1.0, 0.0)) -> li
 RECORDS: tuple[RecordSource, ...] = (
     *[RecordSource("close_formation", s, "close_formation_ppo_setpoints_levels.json", ("by_level", f"sigma_{s:g}", "episodes"))
       for s in (1.0, 0.0, 0.5, 1.5)],
+    # SAC and recurrent PPO flown beside PPO and the baselines on the same episodes (train/committed_runs_65.sh)
+    *[RecordSource("close_formation", s, "close_formation_algorithms_levels.json", ("by_level", f"sigma_{s:g}", "episodes"))
+      for s in (1.0, 0.0, 0.5, 1.5)],
     *_levels("echelon3", "echelon3_ppo_setpoints_levels.json", "echelon3", 0, (1.0,)),
     *_levels("echelon3", "echelon3_ppo_setpoints_levels.json", "echelon3", 1, (0.0,)),
     *_levels("vee5", "vee5_ppo_setpoints_levels.json", "vee5", 0),
