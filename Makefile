@@ -44,7 +44,7 @@ $(PEERS_VENV)/bin/python:
 	$(PEERS_VENV)/bin/python -m pip install --quiet -c constraints.txt "numpy<2" torch vmas PyFlyt
 
 bench-peers: $(STAMP) $(PEERS_VENV)/bin/python
-	$(VENV)/bin/formation-env bench --json --peers --peer-python $(PEERS_VENV)/bin/python $(if $(OUT),> $(OUT),)
+	$(VENV)/bin/formation-env bench --json --peers --peer-python $(PEERS_VENV)/bin/python $(if $(OUT),> $(OUT).tmp && mv $(OUT).tmp $(OUT),)
 
 verify: $(STAMP)
 	$(VENV)/bin/formation-env verify
