@@ -130,9 +130,13 @@ def test_the_projects_off_policy_zips_load_safely_and_act_as_sb3s(tmp_path, algo
 
 
 def test_the_committed_policies_act_as_sb3_loads_them():
-    from stable_baselines3 import PPO
+    from sb3_contrib import RecurrentPPO
+    from stable_baselines3 import PPO, SAC
 
+    loaders = {"ppo": PPO, "mappo": PPO, "sac": SAC, "recurrent_ppo": RecurrentPPO}
     for path in sorted((REPO / "train" / "policies").glob("*_seed0.zip")):
-        safe, ref = load_sb3_model(path, "ppo"), PPO.load(str(path), device="cpu")
+        algo = json.loads(path.with_suffix(".json").read_text())["env"]["algo"]
+        algo = "ppo" if algo == "mappo" else algo  # MAPPO's policies are SB3 PPO's
+        safe, ref = load_sb3_model(path, algo), loaders[algo].load(str(path), device="cpu")
         obs = np.random.default_rng(1).normal(size=(3, safe.observation_space.shape[0])).astype(np.float32)
         assert np.array_equal(safe.predict(obs, deterministic=True)[0], ref.predict(obs, deterministic=True)[0]), path
