@@ -19,6 +19,7 @@ from __future__ import annotations
 import os
 import subprocess
 import sys
+import tempfile
 import threading
 import time
 from pathlib import Path
@@ -153,8 +154,12 @@ def _second_process() -> subprocess.Popen:
                PYTHONPATH=os.pathsep.join(p for p in (str(_PACKAGE.parent), os.environ.get("PYTHONPATH")) if p))
     code = ("from formation_env.sim import Simulation; from formation_env.sim.warmup import STAGES, "
             f"SECOND_PROCESS_STAGE; STAGES[SECOND_PROCESS_STAGE][1](Simulation)")
-    return subprocess.Popen([sys.executable, "-c", code], env=env, stdin=subprocess.DEVNULL,
-                            stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
+    # its messages go to a file, not a pipe: nothing reads them until this process reaches that stage
+    log = tempfile.TemporaryFile()
+    proc = subprocess.Popen([sys.executable, "-c", code], env=env, stdin=subprocess.DEVNULL,
+                            stdout=subprocess.DEVNULL, stderr=log)
+    proc.log = log
+    return proc
 
 
 def warm_up(simulation, stream=sys.stderr, processes: int | None = None) -> float:
@@ -181,7 +186,10 @@ def warm_up(simulation, stream=sys.stderr, processes: int | None = None) -> floa
                 print(f"  [{k}/{len(STAGES)}] compiling {what}{where} ...", file=stream, flush=True)
             with _Heartbeat(stream, k, len(STAGES)):
                 if second is not None and k - 1 == SECOND_PROCESS_STAGE:
-                    _, err = second.communicate()
+                    second.wait()
+                    second.log.seek(0)
+                    err = second.log.read()
+                    second.log.close()
                     if second.returncode != 0 and stream is not None:  # compiled here instead, below
                         print(f"  [{k}/{len(STAGES)}] the second process failed (compiling here instead): "
                               f"{err.decode(errors='replace').strip().splitlines()[-1:]}", file=stream, flush=True)
@@ -194,6 +202,7 @@ def warm_up(simulation, stream=sys.stderr, processes: int | None = None) -> floa
         if second is not None:  # a stage before it failed: nothing waits for the second process any more
             second.kill()
             second.wait()
+            second.log.close()
     try:
         _STAMP.parent.mkdir(parents=True, exist_ok=True)
         _STAMP.write_text(f"warm-up {time.strftime('%Y-%m-%d %H:%M:%S')}\n")

@@ -37,3 +37,23 @@ def test_the_two_decision_steps_are_separate_stages():
 def test_processes_out_of_range_is_refused():
     with pytest.raises(ValueError, match="processes must be 1 or 2, got 3"):
         warmup.warm_up(Simulation, None, processes=3)
+
+
+def test_a_failed_second_process_is_reported_and_its_stage_compiled_here(monkeypatch):
+    import subprocess
+    import sys
+    import tempfile
+
+    def failing():
+        log = tempfile.TemporaryFile()
+        proc = subprocess.Popen([sys.executable, "-c", "import sys; sys.stderr.write('boom\\n'); sys.exit(3)"],
+                                stderr=log)
+        proc.log = log
+        return proc
+
+    monkeypatch.setattr(warmup, "_second_process", failing)
+    out = io.StringIO()
+    warmup.warm_up(Simulation, out, processes=2)
+    text = out.getvalue()
+    assert "the second process failed (compiling here instead): ['boom']" in text, text
+    assert any("done in" in ln for ln in _stage_lines(text, warmup.SECOND_PROCESS_STAGE + 1))
