@@ -16,7 +16,6 @@
 from __future__ import annotations
 
 import dataclasses
-import json
 import re
 import sys
 from pathlib import Path
@@ -118,17 +117,16 @@ def _randomisation(r) -> str:
 def _versus_lines(task, versus: list[dict]) -> list[str]:
     """What the task's recipe-against-PPO records (``formation-env publish versus``) say at the headline level, one
     sentence each, the verdict read off the paired interval."""
-    from ..tasks.base import HEADLINE_METRICS
+    from ..tasks.base import ALGORITHM_LABELS, HEADLINE_METRICS
 
     ev = task.evaluation
-    labels = {"sac": "SAC", "recurrent_ppo": "recurrent PPO", "td3": "TD3", "mappo": "MAPPO"}
     lines = []
     for r in versus:
         level = next((v for v in r["levels"].values() if v["turbulence_sigma_mps"] == ev.headline_level), None)
         if level is None:
             continue
         algo = r["candidate"][len(task.name) + 1:].rsplit("_", 1)[0]
-        name = labels.get(algo, algo)
+        name = ALGORITHM_LABELS.get(algo, algo)
         lo, hi = level["difference_ci"]
         verdict = (f"{name} is better (the interval is clear of zero)" if level["better"] else
                    "PPO is better (the interval is clear of zero)" if (lo > 0 if not ev.higher_is_better else hi < 0)
@@ -236,9 +234,10 @@ def task_page(task, notes: dict[str, str], results: frozenset = frozenset(), ver
     else:
         sec["Results"] += ["No policy or baseline record is committed for this task yet: the "
                            "[Results](../results.md) page lists those that are."]
-    if versus and _versus_lines(task, versus):
+    versus_lines = _versus_lines(task, versus or [])
+    if versus_lines:
         sec["Results"] += ["", "Other algorithms against PPO (every level: [Results, against PPO]"
-                           f"(../results.md#{task.name})):", "", *_versus_lines(task, versus)]
+                           f"(../results.md#{task.name})):", "", *versus_lines]
     title = task.name.replace("_", " ").capitalize()
     out = [HEADER.format(name=task.name) + f"# {title} (`{task.name}`)", ""]
     for s in SECTIONS:
@@ -322,20 +321,15 @@ def options_block() -> str:
 
 def render_pages(root: Path) -> dict[Path, str]:
     """Every generated page under ``root`` (the repository) -> its text."""
-    from ..tasks import TASKS
+    from ..tasks import TASKS, versus_records
 
     docs = root / "docs"
     res = docs / "results.md"
     results = frozenset(re.findall(r"(?m)^## ([a-z0-9_]+)\s*$", res.read_text(encoding="utf-8"))) if res.is_file() \
         else frozenset()
-    policies = root / "train" / "policies"
-
-    def versus(name: str) -> list[dict]:  # the records of formation-env publish versus, data beside the policies
-        records = [json.loads(f.read_text(encoding="utf-8")) for f in sorted(policies.glob(f"{name}_*_versus_ppo.json"))]
-        return [r for r in records if r.get("task") == name]
-
+    policies = root / "train" / "policies"  # the publish-versus records lie beside the policies (data)
     pages = {docs / "tasks" / f"{name}.md": task_page(t, _notes(docs / "tasks" / "notes" / f"{name}.md", name), results,
-                                                      versus(name))
+                                                      [r for _, r in versus_records(policies, name)])
              for name, t in TASKS.items()}
     pages[docs / "tasks" / "index.md"] = tasks_index(TASKS.values())
     env = docs / "environments.md"

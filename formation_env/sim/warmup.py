@@ -116,7 +116,7 @@ STAGES = (("Aerosonde aerodynamics, propulsion and trim", _aircraft),
           ("the thesis PID as a stand-alone policy", _control),
           ("the batched decision step with the energy tasks' wake, and the energy account", _decision_energy))
 #: the stage a second process compiles while this one compiles the others: the two decision steps are about
-#: half of the compile time each and share no compiled function, so two cores compile them at the same time
+#: half of the compile time each and are separate specialisations, so two cores compile them at the same time
 SECOND_PROCESS_STAGE = len(STAGES) - 1
 
 
@@ -147,19 +147,17 @@ class _Heartbeat:
             self._thread.join()
 
 
-def _second_process() -> subprocess.Popen:
+def _second_process() -> tuple[subprocess.Popen, object]:
     """Start compiling :data:`SECOND_PROCESS_STAGE` in a new interpreter importing this same package (its own
-    automatic warm-up off); numba writes what it compiles to the shared cache."""
+    automatic warm-up off); numba writes what it compiles to the shared cache. Returns the process and the
+    temporary file its messages go to (not a pipe: nothing reads them until this process reaches that stage)."""
     env = dict(os.environ, FORMATION_ENV_NO_WARMUP="1",
                PYTHONPATH=os.pathsep.join(p for p in (str(_PACKAGE.parent), os.environ.get("PYTHONPATH")) if p))
     code = ("from formation_env.sim import Simulation; from formation_env.sim.warmup import STAGES, "
-            f"SECOND_PROCESS_STAGE; STAGES[SECOND_PROCESS_STAGE][1](Simulation)")
-    # its messages go to a file, not a pipe: nothing reads them until this process reaches that stage
+            "SECOND_PROCESS_STAGE; STAGES[SECOND_PROCESS_STAGE][1](Simulation)")
     log = tempfile.TemporaryFile()
-    proc = subprocess.Popen([sys.executable, "-c", code], env=env, stdin=subprocess.DEVNULL,
-                            stdout=subprocess.DEVNULL, stderr=log)
-    proc.log = log
-    return proc
+    return subprocess.Popen([sys.executable, "-c", code], env=env, stdin=subprocess.DEVNULL,
+                            stdout=subprocess.DEVNULL, stderr=log), log
 
 
 def warm_up(simulation, stream=sys.stderr, processes: int | None = None) -> float:
@@ -176,7 +174,7 @@ def warm_up(simulation, stream=sys.stderr, processes: int | None = None) -> floa
         raise ValueError(f"warm_up: processes must be 1 or 2, got {processes!r}")
     t0 = time.perf_counter()
     _BUSY = True
-    second = _second_process() if processes == 2 else None
+    second, second_log = _second_process() if processes == 2 else (None, None)
     try:
         for k, (what, fn) in enumerate(STAGES, 1):
             t = time.perf_counter()
@@ -187,9 +185,9 @@ def warm_up(simulation, stream=sys.stderr, processes: int | None = None) -> floa
             with _Heartbeat(stream, k, len(STAGES)):
                 if second is not None and k - 1 == SECOND_PROCESS_STAGE:
                     second.wait()
-                    second.log.seek(0)
-                    err = second.log.read()
-                    second.log.close()
+                    second_log.seek(0)
+                    err = second_log.read()
+                    second_log.close()
                     if second.returncode != 0 and stream is not None:  # compiled here instead, below
                         print(f"  [{k}/{len(STAGES)}] the second process failed (compiling here instead): "
                               f"{err.decode(errors='replace').strip().splitlines()[-1:]}", file=stream, flush=True)
@@ -202,7 +200,7 @@ def warm_up(simulation, stream=sys.stderr, processes: int | None = None) -> floa
         if second is not None:  # a stage before it failed: nothing waits for the second process any more
             second.kill()
             second.wait()
-            second.log.close()
+            second_log.close()
     try:
         _STAMP.parent.mkdir(parents=True, exist_ok=True)
         _STAMP.write_text(f"warm-up {time.strftime('%Y-%m-%d %H:%M:%S')}\n")

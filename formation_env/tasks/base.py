@@ -20,7 +20,7 @@ from ..scenarios import Scenario, get_scenario, register_scenario
 from ..sim.config import EnvConfig, Randomisation, RewardWeights
 from .terms import TaskTerms
 
-__all__ = ["Task", "EvaluationProtocol", "register_task", "get_task", "task_names", "TASKS", "task_options",
+__all__ = ["Task", "EvaluationProtocol", "ALGORITHM_LABELS", "versus_records", "register_task", "get_task", "task_names", "TASKS", "task_options",
            "task_for_scenario", "make_config", "gym_ids", "task_learning", "TEST_SEED_BASE", "VALIDATION_SEED_BASE",
            "HEADLINE_METRICS"]
 
@@ -36,6 +36,20 @@ HEADLINE_METRICS = {
     "reconfig_success": ("success (in the 1-span window at the end)", True),
     "rms_slot_error_m": ("RMS slot error, m", False),
 }
+#: training algorithm (``formation-env train --algo``, a published policy's ``<task>_<algo>_<mode>`` name) -> label
+ALGORITHM_LABELS = {"ppo": "PPO", "mappo": "MAPPO", "sac": "SAC", "td3": "TD3", "recurrent_ppo": "recurrent PPO"}
+
+
+def versus_records(folder, task_name: str) -> list:
+    """The task's recipe-against-PPO records in ``folder`` (``formation-env publish versus``:
+    ``<task>_<algo>_setpoints_versus_ppo.json``), as (path, record) pairs in name order; a file whose record names
+    another task is not the task's."""
+    import json
+    from pathlib import Path
+
+    pairs = [(f, json.loads(f.read_text(encoding="utf-8")))
+             for f in sorted(Path(folder).glob(f"{task_name}_*_versus_ppo.json"))]
+    return [(f, r) for f, r in pairs if r.get("task") == task_name]
 
 
 @dataclass(frozen=True)

@@ -46,10 +46,8 @@ def test_a_failed_second_process_is_reported_and_its_stage_compiled_here(monkeyp
 
     def failing():
         log = tempfile.TemporaryFile()
-        proc = subprocess.Popen([sys.executable, "-c", "import sys; sys.stderr.write('boom\\n'); sys.exit(3)"],
-                                stderr=log)
-        proc.log = log
-        return proc
+        return subprocess.Popen([sys.executable, "-c", "import sys; sys.stderr.write('boom\\n'); sys.exit(3)"],
+                                stderr=log), log
 
     monkeypatch.setattr(warmup, "_second_process", failing)
     out = io.StringIO()

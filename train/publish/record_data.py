@@ -14,6 +14,7 @@ from pathlib import Path
 import numpy as np
 
 from formation_env.constants import AEROSONDE_SPAN_M
+from formation_env.tasks.base import ALGORITHM_LABELS
 
 __all__ = ["REPO", "POLICIES", "N_BOOT", "SPAN_M", "CLASSICAL", "CEILINGS", "ALIASES", "RecordSource", "RECORDS",
            "collect"]
@@ -100,7 +101,7 @@ def _label(group: str, task: str) -> str:
     if m is None:
         return group
     trained_on, algo = m.group(1), m.group(2)
-    label = {"ppo": "PPO", "mappo": "MAPPO", "sac": "SAC", "td3": "TD3", "recurrent_ppo": "recurrent PPO"}[algo]
+    label = ALGORITHM_LABELS[algo]
     return label if trained_on == task else f"{label} trained on {trained_on} (transfer)"
 
 

@@ -134,12 +134,9 @@ def versus_markdown(task, policies: Path | None = None) -> list[str]:
     ``<task>_<algo>_setpoints_versus_ppo.json``): per level the difference in the headline metric (seed-averaged,
     paired by episode) with its 95 % interval, and the probability that a run of the one beats a run of the other on
     an episode. No section where the task has none."""
-    from formation_env.tasks import HEADLINE_METRICS
+    from formation_env.tasks import HEADLINE_METRICS, versus_records
 
-    folder = POLICIES if policies is None else policies
-    files = sorted(folder.glob(f"{task.name}_*_versus_ppo.json"))
-    records = [(f, json.loads(f.read_text(encoding="utf-8"))) for f in files]
-    records = [(f, r) for f, r in records if r.get("task") == task.name]
+    records = versus_records(POLICIES if policies is None else policies, task.name)
     if not records:
         return []
     metric = HEADLINE_METRICS[task.evaluation.metric][0]
