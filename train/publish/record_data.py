@@ -62,6 +62,8 @@ RECORDS: tuple[RecordSource, ...] = (
     *_levels("vee5", "vee5_ppo_setpoints_levels.json", "vee5", 0),
     *_levels("vee5", "vee5_mappo_setpoints_levels.json", "vee5", 0, (1.0,)),
     *_levels("vee5", "vee5_mappo_setpoints_levels.json", "vee5", 1, (0.0,)),
+    *[RecordSource("vee5", s, "vee5_algorithms_levels.json", ("by_level", f"sigma_{s:g}", "episodes"))
+      for s in (1.0, 0.0, 1.5)],
     *_levels("vee9", "vee5_ppo_setpoints_levels.json", "vee9", 0, (1.0,)),
     *_levels("vee_rotation", "vee_rotation_ppo_setpoints_levels.json", "vee_rotation", 0, (1.0,)),
     *_levels("vee_rotation", "vee_rotation_ppo_setpoints_levels.json", "vee_rotation", 1, (0.0,)),
