@@ -199,7 +199,7 @@ def test_torchrl_close_formation(workdir):
     assert "GymEnv('formation_env/CloseFormation-v" in out
 
 
-RAY_EXIT_DEADLINE_S = 30.0
+RAY_EXIT_DEADLINE_S = 90.0
 
 
 def _ray_processes(tmpdir: str) -> list[int]:
