@@ -20,7 +20,7 @@ from ..scenarios import Scenario, get_scenario, register_scenario
 from ..sim.config import EnvConfig, Randomisation, RewardWeights
 from .terms import TaskTerms
 
-__all__ = ["Task", "EvaluationProtocol", "RecordFile", "ALGORITHM_LABELS", "versus_records", "register_task", "get_task", "task_names", "TASKS", "task_options",
+__all__ = ["Task", "EvaluationProtocol", "RecordFile", "levels_record", "ALGORITHM_LABELS", "versus_records", "register_task", "get_task", "task_names", "TASKS", "task_options",
            "task_for_scenario", "make_config", "gym_ids", "task_learning", "TEST_SEED_BASE", "VALIDATION_SEED_BASE",
            "HEADLINE_METRICS"]
 
@@ -65,6 +65,13 @@ class RecordFile:
     def keys_at(self, sigma: float) -> tuple:
         """The path of keys to the episodes at level ``sigma``."""
         return tuple(k.format(sigma=f"{sigma:g}") if isinstance(k, str) else k for k in self.path)
+
+
+def levels_record(file: str, levels: tuple, task: str | None = None, index: int = 0) -> RecordFile:
+    """A record written by ``formation-env publish levels``: a one-task record (``task`` None), or record ``index``
+    of ``task`` in a record of several."""
+    by_level = ("by_level", "sigma_{sigma}", "episodes")
+    return RecordFile(file, by_level if task is None else ("records", task, index) + by_level, levels)
 
 
 @dataclass(frozen=True)

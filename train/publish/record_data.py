@@ -1,7 +1,7 @@
 """The committed evaluation records as data: where each task's per-episode columns are in ``train/policies/``
-(:data:`RECORDS`, from each task's ``evaluation.records``), how a record's controllers are grouped and named, and :func:`collect`, which reads them. The
-results page (:mod:`train.publish.results_page`) and the absolute metric (:mod:`train.publish.absolute`) compute
-every number they show from what this module reads."""
+(:data:`RECORDS`, from each task's ``evaluation.records``), how a record's controllers are grouped and named, and
+:func:`collect`, which reads them. The results page (:mod:`train.publish.results_page`) and the absolute metric
+(:mod:`train.publish.absolute`) compute every number they show from what this module reads."""
 
 from __future__ import annotations
 

@@ -20,7 +20,7 @@ from __future__ import annotations
 
 from ...scenarios import Scenario, SlotSchedule
 from ...sim.config import Randomisation, RewardWeights
-from ..base import EvaluationProtocol, RecordFile, Task, register_task
+from ..base import EvaluationProtocol, Task, levels_record, register_task
 from . import optimum as _optimum
 
 __all__ = ["SCENARIOS", "TASKS", "FormationReference", "CLOSE_FORMATIONS_REWARD", "CLOSE_FORMATIONS_RANDOMISATION",
@@ -88,21 +88,16 @@ _DEFS = (
 SCENARIOS = {name: _scenario(name, desc) for name, _, desc in _DEFS}
 
 
-def _levels(file: str, key: str, index: int, levels=(1.0, 0.0)) -> RecordFile:
-    """Record ``index`` of task ``key`` in a multi-task levels record (``formation-env publish levels``)."""
-    return RecordFile(file, ("records", key, index, "by_level", "sigma_{sigma}", "episodes"), levels)
-
-
 #: each task's committed records (train/policies/); vee9's are the vee5 policies flown on it (transfer)
 _RECORDS = {
-    "echelon3": (_levels("echelon3_ppo_setpoints_levels.json", "echelon3", 0, (1.0,)),
-                 _levels("echelon3_ppo_setpoints_levels.json", "echelon3", 1, (0.0,))),
-    "vee5": (_levels("vee5_ppo_setpoints_levels.json", "vee5", 0),
-             _levels("vee5_mappo_setpoints_levels.json", "vee5", 0, (1.0,)),
-             _levels("vee5_mappo_setpoints_levels.json", "vee5", 1, (0.0,)),
+    "echelon3": (levels_record("echelon3_ppo_setpoints_levels.json", (1.0,), "echelon3", 0),
+                 levels_record("echelon3_ppo_setpoints_levels.json", (0.0,), "echelon3", 1)),
+    "vee5": (levels_record("vee5_ppo_setpoints_levels.json", (1.0, 0.0), "vee5", 0),
+             levels_record("vee5_mappo_setpoints_levels.json", (1.0,), "vee5", 0),
+             levels_record("vee5_mappo_setpoints_levels.json", (0.0,), "vee5", 1),
              # SAC and recurrent PPO beside PPO on the same episodes
-             RecordFile("vee5_algorithms_levels.json", ("by_level", "sigma_{sigma}", "episodes"), (1.0, 0.0, 1.5))),
-    "vee9": (_levels("vee5_ppo_setpoints_levels.json", "vee9", 0, (1.0,)),),
+             levels_record("vee5_algorithms_levels.json", (1.0, 0.0, 1.5))),
+    "vee9": (levels_record("vee5_ppo_setpoints_levels.json", (1.0,), "vee9", 0),),
 }
 TASKS = {name: register_task(Task(name, SCENARIOS[name], gym_id, 1, baselines=("pid", "station_keeper"),
                                   options=dict(CLOSE_FORMATIONS_OPTIONS),

@@ -37,7 +37,7 @@ import numpy as np
 
 from ...scenarios import Scenario, SlotSchedule
 from ...sim.config import RewardWeights
-from ..base import EvaluationProtocol, RecordFile, Task, register_task
+from ..base import EvaluationProtocol, Task, levels_record, register_task
 from . import optimum as _optimum
 
 __all__ = ["PHASES_S", "rotation_keyframes", "leader_dropback_keyframes", "SCENARIO", "ROTATION_REWARD", "register"]
@@ -111,19 +111,14 @@ ROTATION_REWARD = RewardWeights(slot_scale_m=0.29, along_track_weight=1.0, benef
                                 separation=25.0, barrier_separation_b=1.5, hold=1.0, hold_radius_b=0.75)
 
 
-def _path(index: int) -> tuple:
-    """Record ``index`` of the committed multi-task levels record (``formation-env publish levels``)."""
-    return ("records", "vee_rotation", index, "by_level", "sigma_{sigma}", "episodes")
-
-
 def register(base_options: dict) -> Task:
     """Registers ``vee_rotation``: the N-UAV formations' options ``base_options`` with :data:`ROTATION_REWARD`.
     The package calls it with its options (it owns them; this module does not import the package)."""
     return register_task(Task("vee_rotation", SCENARIO, "formation_env/VeeRotation", 1,
                               options={**base_options, "reward": ROTATION_REWARD},
                               evaluation=EvaluationProtocol(levels=(0.0, 1.0), metric="reconfig_success", records=(
-                                  RecordFile("vee_rotation_ppo_setpoints_levels.json", _path(0), (1.0,)),
-                                  RecordFile("vee_rotation_ppo_setpoints_levels.json", _path(1), (0.0,)))),
+                                  levels_record("vee_rotation_ppo_setpoints_levels.json", (1.0,), "vee_rotation", 0),
+                                  levels_record("vee_rotation_ppo_setpoints_levels.json", (0.0,), "vee_rotation", 1))),
                               learning="all", baselines=("pid", "station_keeper"),
                               description="vee of 5 rotating the lead (leader to a trailing slot, the others up)",
                               test_randomisation={"initial_offset_m": 0.3}))

@@ -96,7 +96,8 @@ TASK = register_task(Task(
              "randomisation": WAKE_SURFING_TRAINING_RANDOMISATION},
     evaluation=EvaluationProtocol(levels=(0.0, 0.25, 1.0), headline_level=0.25, metric="harvest_ratio",
                                   preset=_EVAL_PRESET, absolute=True, records=(
-                                      RecordFile("wake_surfing_ppo_setpoints_evaluation.json", ("controllers",), (0.25,)),
+                                      RecordFile("wake_surfing_ppo_setpoints_evaluation.json", ("controllers",),
+                                                 (0.25,)),
                                       RecordFile("wake_surfing_ppo_setpoints_levels.json",
                                                  ("levels", "wake_surfing_sigma_{sigma}", "episodes"), (0.0, 1.0)))),
     baselines=BASELINES, reference=_optimum, metrics=_metrics.METRICS, evaluator=_evaluation.EVALUATION,
@@ -125,7 +126,8 @@ RANDOM_LEADER_TASK = register_task(Task(
     evaluation=dataclasses.replace(
         TASK.evaluation, preset={**_EVAL_PRESET, "randomisation": RANDOM_LEADER_RANDOMISATION}, absolute=False,
         # the variant's own policies, then wake_surfing's flown on the variant's episodes (per level in this order)
-        records=tuple(RecordFile(f, ("levels", "wake_surfing_random_leader_sigma_{sigma}", "episodes"), (0.25, 0.0, 1.0))
+        records=tuple(RecordFile(f, ("levels", "wake_surfing_random_leader_sigma_{sigma}", "episodes"),
+                                 (0.25, 0.0, 1.0))
                       for f in ("wake_surfing_random_leader_ppo_setpoints_levels.json",
                                 "wake_surfing_ppo_setpoints_levels.json"))),
     baselines=BASELINES, reference=_optimum, metrics=_metrics.METRICS, evaluator=_evaluation.EVALUATION,
