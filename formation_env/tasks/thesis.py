@@ -14,7 +14,7 @@ from __future__ import annotations
 import dataclasses
 
 from ..sim.config import Randomisation, RewardWeights
-from .base import EvaluationProtocol, RecordFile, Task, register_task
+from .base import EvaluationProtocol, RecordFile, Task, levels_record, register_task
 
 __all__ = ["THESIS_TASKS", "THESIS_RANDOMISATION"]
 
@@ -33,7 +33,8 @@ THESIS_TASKS = tuple(register_task(t) for t in (
          options={**_BASE, "reward": RewardWeights(terminal_forfeit=0.0)},
          description="6.6: follow the slot schedule from behind to ahead of the leader",
          evaluation=EvaluationProtocol(levels=(0.0, 1.0, 1.5), metric="reconfig_success", absolute=True, records=(
-             RecordFile("reconfiguration_ppo_setpoints_evaluation.json", ("policies",)),))),
+             RecordFile("reconfiguration_ppo_setpoints_evaluation.json", ("policies",)),
+             levels_record("reconfiguration_algorithms_levels.json", (1.0, 0.0, 1.5))))),
     Task("gust", "gust", "formation_env/Gust", 0, options=dict(_BASE), baselines=("pid",),
          description="6.4: fly through the gusts", evaluation=_RMS),
     Task("tracking", "tracking", "formation_env/Tracking", 0, options=dict(_BASE), baselines=("pid",),
