@@ -85,7 +85,10 @@ class EvaluationProtocol:
     scenario with the task's ``test_randomisation``. ``records``: the committed records its results page reads
     (:class:`RecordFile`, in the order a later one's runs replace an earlier one's of the same name);
     ``absolute``: whether its learned methods are also flown on the absolute metric's 1,000 further episodes
-    (``formation-env results --absolute``)."""
+    (``formation-env results --absolute``). ``ppo_record_score``: the task's committed PPO evaluation at sigma 1
+    (``<task>_ppo_setpoints_evaluation.json``: ``formation-env publish committed``, or the task's own evaluation)
+    and the per-episode score it enters the table across tasks of ``formation-env publish recompute`` with (a key
+    of ``train.evaluation.aggregates.SCORES``); None: the task has no such record."""
 
     levels: tuple = (0.0, 1.0, 1.5)
     headline_level: float = 1.0
@@ -95,6 +98,7 @@ class EvaluationProtocol:
     preset: dict | None = None
     records: tuple = ()
     absolute: bool = False
+    ppo_record_score: str | None = None
 
     def __post_init__(self) -> None:
         if self.metric not in HEADLINE_METRICS:
@@ -104,6 +108,9 @@ class EvaluationProtocol:
                              f"{self.levels!r}")
         if not 1 <= self.episodes <= 100_000:
             raise ValueError(f"EvaluationProtocol.episodes must be in [1, 100000], got {self.episodes!r}")
+        if self.ppo_record_score is not None and not (isinstance(self.ppo_record_score, str) and self.ppo_record_score):
+            raise ValueError(f"EvaluationProtocol.ppo_record_score must be a score name or None, got "
+                             f"{self.ppo_record_score!r}")
         for r in self.records:
             if not isinstance(r, RecordFile):
                 raise ValueError(f"EvaluationProtocol.records must hold RecordFile objects, got {r!r}")

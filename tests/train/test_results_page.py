@@ -85,3 +85,22 @@ def test_the_catalogue_is_the_tasks_own_records():
                                                                                             "episodes")
     with pytest.raises(ValueError, match="RecordFile objects, got 'x.json'"):
         EvaluationProtocol(records=("x.json",))
+
+
+def test_the_committed_ppo_evaluations_are_the_tasks_declarations():
+    # publish recompute and publish committed read the tasks' declarations (EvaluationProtocol.ppo_record_score):
+    # each declared record exists, its score is one the aggregates know, and no other such record is left out
+    import dataclasses
+
+    from formation_env.tasks import TASKS, EvaluationProtocol
+    from train.evaluation.aggregates import SCORES
+    from train.publish import publish, recompute, report_committed
+
+    assert set(recompute.TASKS) == {n for n, t in TASKS.items() if t.evaluation.ppo_record_score}
+    on_disk = {p.name[: -len("_ppo_setpoints_evaluation.json")]
+               for p in publish.POLICIES.glob("*_ppo_setpoints_evaluation.json")}
+    assert set(recompute.TASKS) == on_disk
+    assert all(recompute.HEADLINE[t] in SCORES for t in recompute.TASKS)
+    assert set(report_committed.TASKS) == {t for t in recompute.TASKS if TASKS[t].evaluator is None}
+    with pytest.raises(ValueError, match="ppo_record_score must be a score name or None, got 3"):
+        dataclasses.replace(EvaluationProtocol(), ppo_record_score=3)

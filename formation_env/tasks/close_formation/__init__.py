@@ -51,6 +51,8 @@ TASK = register_task(Task("close_formation", SCENARIO, "formation_env/CloseForma
                           guard="separation_guard", guard_options={"clip_ramp": 0.25},
                           evaluation=EvaluationProtocol(
                               levels=(0.0, 0.5, 1.0, 1.5), metric="harvest_ratio", absolute=True,
+                              # its first committed evaluation (sigma 1) judged the slot error
+                              ppo_record_score="rms_slot_error_m",
                               records=(levels_record("close_formation_ppo_setpoints_levels.json", _LEVELS),
                                        # SAC and recurrent PPO beside PPO on the same episodes
                                        levels_record("close_formation_algorithms_levels.json", _LEVELS))),

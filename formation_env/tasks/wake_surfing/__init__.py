@@ -95,7 +95,7 @@ TASK = register_task(Task(
     options={"action_mode": "setpoints", "compute_benefit": True, "reward": WAKE_SURFING_REWARD,
              "randomisation": WAKE_SURFING_TRAINING_RANDOMISATION},
     evaluation=EvaluationProtocol(levels=(0.0, 0.25, 1.0), headline_level=0.25, metric="harvest_ratio",
-                                  preset=_EVAL_PRESET, absolute=True, records=(
+                                  preset=_EVAL_PRESET, absolute=True, ppo_record_score="saving_ratio", records=(
                                       RecordFile("wake_surfing_ppo_setpoints_evaluation.json", ("controllers",),
                                                  (0.25,)),
                                       RecordFile("wake_surfing_ppo_setpoints_levels.json",
@@ -125,6 +125,7 @@ RANDOM_LEADER_TASK = register_task(Task(
              "randomisation": dataclasses.replace(WAKE_SURFING_TRAINING_RANDOMISATION, **_LEADER_DRAWS)},
     evaluation=dataclasses.replace(
         TASK.evaluation, preset={**_EVAL_PRESET, "randomisation": RANDOM_LEADER_RANDOMISATION}, absolute=False,
+        ppo_record_score=None,
         # the variant's own policies, then wake_surfing's flown on the variant's episodes (per level in this order)
         records=tuple(RecordFile(f, ("levels", "wake_surfing_random_leader_sigma_{sigma}", "episodes"),
                                  (0.25, 0.0, 1.0))
