@@ -21,7 +21,7 @@ $(VENV)/bin/python:
 # Re-install whenever pyproject.toml or constraints.txt changes (the stamp name carries their checksum).
 $(STAMP): $(VENV)/bin/python pyproject.toml constraints.txt
 	$(PY) -m pip install --quiet -c constraints.txt -e ".[$(EXTRAS)]"
-	$(VENV)/bin/formation-env warmup  # compile the kernels now, with progress (about 2 minutes on 2 idle cores, longer under load; else the first run does it)
+	$(VENV)/bin/formation-env warmup  # compile the kernels now, with progress (about 90 s on 2 idle cores, longer under load; else the first run does it)
 	rm -f $(VENV)/.installed-*
 	touch $(STAMP)
 

@@ -34,7 +34,7 @@ jobs_list() {
     echo "sac reconfiguration 700000 $seed"
     echo "recurrent_ppo close_formation 1500000 $seed"
     echo "recurrent_ppo vee5 700000 $seed"
-    echo "recurrent_ppo reconfiguration 1500000 $seed"
+    echo "recurrent_ppo reconfiguration 1000000 $seed"
   done
 }
 selected() {

@@ -15,8 +15,8 @@ def register(sub) -> None:
     p.add_argument("--check", action="store_true",
                    help="write nothing; exit 1 when a generated file differs from what the records give")
     p.add_argument("--absolute", metavar="TASK",
-                   help="fly the best seed of each learned method of TASK (close_formation, echelon3, vee5, "
-                        "reconfiguration, wake_surfing) on 1,000 further held-out episodes and write "
+                   help="fly the best seed of each learned method of TASK (a task whose evaluation protocol "
+                        "carries the absolute metric) on 1,000 further held-out episodes and write "
                         "train/policies/TASK_absolute.json (minutes to an hour on 2 cores)")
     p.add_argument("--overwrite", action="store_true", help="with --absolute: replace a method already recorded")
     p.set_defaults(func=run)

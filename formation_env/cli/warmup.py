@@ -22,8 +22,8 @@ def run(args) -> int:
     if is_warm() and not args.force:
         print("formation-env: the kernel cache is warm (use --force to run the warm-up anyway)", file=sys.stderr)
         return 0
-    print("formation-env: compiling the simulation kernels (about 2 minutes on 2 idle cores, longer when other "
-          "processes share them; cached afterwards):",
+    print("formation-env: compiling the simulation kernels (about 90 s on 2 idle cores, about 2 minutes with one "
+          "of them busy, longer under heavier load; cached afterwards):",
           file=sys.stderr, flush=True)
     total = warm_up(Simulation, sys.stderr, processes=args.processes)
     print(f"formation-env: kernels ready in {total:.0f} s", file=sys.stderr)

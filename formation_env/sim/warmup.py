@@ -1,8 +1,8 @@
 """Compile the kernels ahead of time, with progress, instead of silently on the first step.
 
 The kernels are numba functions cached on disk (``cache=True``: ``__pycache__`` beside each source file). A fresh
-clone has no cache, so its first simulation step compiles them: about 2 minutes on 2 idle cores (two processes
-compile at once), longer when other processes share the cores. ``make install`` runs :func:`warm_up`
+clone has no cache, so its first simulation step compiles them: about 90 s on 2 idle cores (two processes compile
+at once), longer when other processes share the cores. ``make install`` runs :func:`warm_up`
 (``formation-env warmup``), so the first run after it is warm; and when a :class:`~formation_env.sim.Simulation` is
 built while the cache is cold (a stamp beside this module, written after a complete warm-up of the current sources,
 is missing or older than a source file), :func:`ensure_warm` says so on stderr and compiles stage by stage, naming
@@ -63,13 +63,13 @@ def _wake(simulation) -> None:
     formation_benefit(model, st)
 
 
-def _decision_thesis(simulation) -> None:
+def _decision(simulation) -> None:
     import numpy as np
 
     from .config import EnvConfig, Randomisation
 
-    # one configuration exercises every branch type of the step with the thesis's wake (turbulence, benefit,
-    # set-points, a formation); a one-UAV task flies the same compiled step
+    # one configuration exercises every branch type of the step (turbulence, benefit, set-points, a formation);
+    # every task flies the same compiled step (the wake's sheet law and residual table are values, not types)
     cfg = EnvConfig(scenario="formation_keeping", action_mode="setpoints", compute_benefit=True, duration_s=0.2,
                     randomisation=Randomisation(turbulence_sigma_mps=1.0))
     sim = simulation(cfg, batch_size=2)
@@ -80,16 +80,13 @@ def _decision_thesis(simulation) -> None:
     solo.step(np.zeros((1, solo.n_agents, 4)))
 
 
-def _decision_energy(simulation) -> None:
-    import numpy as np
-
+def _energy(simulation) -> None:
     from .config import EnvConfig
 
-    # the energy tasks' wake (the sheet law and the residual table: switches by type, so a second compiled step),
-    # and the energy account of their infos (computed when read)
+    # the energy account of the energy tasks' infos (computed when read); read after a reset, not a decision, so
+    # that a second process compiling it does not compile the decision step beside the first
     energy = simulation(EnvConfig(scenario="close_formation", compute_benefit=True, duration_s=0.2), batch_size=1)
     energy.reset(seeds=[0])
-    energy.step(np.zeros((1, energy.n_agents, 4)))
     energy.info.energy_account  # noqa: B018
 
 
@@ -111,13 +108,12 @@ def _control(simulation) -> None:
 #: (what compiles, function of the Simulation class): in the order the first run needs them
 STAGES = (("Aerosonde aerodynamics, propulsion and trim", _aircraft),
           ("ELL wake solve and loads", _wake),
-          ("the batched decision step with the thesis's wake (guidance, PID, wake, RK4, turbulence, reward, "
-           "observation)", _decision_thesis),
+          ("the batched decision step (guidance, PID, wake, RK4, turbulence, reward, observation)", _decision),
           ("the thesis PID as a stand-alone policy", _control),
-          ("the batched decision step with the energy tasks' wake, and the energy account", _decision_energy))
-#: the stage a second process compiles while this one compiles the others: the two decision steps are about
-#: half of the compile time each and are separate specialisations, so two cores compile them at the same time
-SECOND_PROCESS_STAGE = len(STAGES) - 1
+          ("the energy account", _energy))
+#: the stages a second process compiles while this one compiles the decision step: that step is about two thirds
+#: of the compile time, the wake's stand-alone kernels, the PID and the energy account the rest
+SECOND_PROCESS_STAGES = (1, 3, 4)
 
 
 class _Heartbeat:
@@ -148,13 +144,13 @@ class _Heartbeat:
 
 
 def _second_process() -> tuple[subprocess.Popen, object]:
-    """Start compiling :data:`SECOND_PROCESS_STAGE` in a new interpreter importing this same package (its own
+    """Start compiling :data:`SECOND_PROCESS_STAGES` in a new interpreter importing this same package (its own
     automatic warm-up off); numba writes what it compiles to the shared cache. Returns the process and the
     temporary file its messages go to (not a pipe: nothing reads them until this process reaches that stage)."""
     env = dict(os.environ, FORMATION_ENV_NO_WARMUP="1",
                PYTHONPATH=os.pathsep.join(p for p in (str(_PACKAGE.parent), os.environ.get("PYTHONPATH")) if p))
     code = ("from formation_env.sim import Simulation; from formation_env.sim.warmup import STAGES, "
-            "SECOND_PROCESS_STAGE; STAGES[SECOND_PROCESS_STAGE][1](Simulation)")
+            "SECOND_PROCESS_STAGES\nfor k in SECOND_PROCESS_STAGES: STAGES[k][1](Simulation)")
     log = tempfile.TemporaryFile()
     return subprocess.Popen([sys.executable, "-c", code], env=env, stdin=subprocess.DEVNULL,
                             stdout=subprocess.DEVNULL, stderr=log), log
@@ -163,9 +159,9 @@ def _second_process() -> tuple[subprocess.Popen, object]:
 def warm_up(simulation, stream=sys.stderr, processes: int | None = None) -> float:
     """Compile (or load from the cache) every kernel, reporting each stage on ``stream`` (None: silent); writes
     the stamp :func:`is_warm` reads. ``simulation``: the :class:`~formation_env.sim.Simulation` class the decision
-    step's stages fly. ``processes``: 2 compiles :data:`SECOND_PROCESS_STAGE` in a second process at the same
-    time as the other stages (then loads it from the cache here, which also compiles whatever that process did
-    not finish); 1 compiles everything here, one stage after the other; None: 2 when the machine has two cores or
+    step's stages fly. ``processes``: 2 compiles :data:`SECOND_PROCESS_STAGES` in a second process at the same
+    time as the other stages (then, after the others, waits for it and loads them from the cache here, which also
+    compiles whatever that process did not finish); 1 compiles everything here, one stage after the other; None: 2 when the machine has two cores or
     more. Returns the seconds it took."""
     global _BUSY
     if processes is None:
@@ -176,25 +172,29 @@ def warm_up(simulation, stream=sys.stderr, processes: int | None = None) -> floa
     _BUSY = True
     second, second_log = _second_process() if processes == 2 else (None, None)
     try:
-        for k, (what, fn) in enumerate(STAGES, 1):
+        # this process's stages first, then the second process's (loaded from the cache it wrote)
+        order = [k for k in range(len(STAGES)) if second is None or k not in SECOND_PROCESS_STAGES]
+        order += [k for k in range(len(STAGES)) if k not in order]
+        for n, k in enumerate(order, 1):
+            what, fn = STAGES[k]
             t = time.perf_counter()
+            in_second = second is not None and k in SECOND_PROCESS_STAGES
             if stream is not None:
-                where = " (in a second process since the start)" if second is not None and k - 1 == \
-                    SECOND_PROCESS_STAGE else ""
-                print(f"  [{k}/{len(STAGES)}] compiling {what}{where} ...", file=stream, flush=True)
-            with _Heartbeat(stream, k, len(STAGES)):
-                if second is not None and k - 1 == SECOND_PROCESS_STAGE:
+                where = " (in a second process since the start)" if in_second else ""
+                print(f"  [{n}/{len(STAGES)}] compiling {what}{where} ...", file=stream, flush=True)
+            with _Heartbeat(stream, n, len(STAGES)):
+                if in_second and second.returncode is None:
                     second.wait()
                     second_log.seek(0)
                     err = second_log.read()
                     second_log.close()
                     if second.returncode != 0 and stream is not None:  # compiled here instead, below
-                        print(f"  [{k}/{len(STAGES)}] the second process failed (compiling here instead): "
+                        print(f"  [{n}/{len(STAGES)}] the second process failed (compiling here instead): "
                               f"{err.decode(errors='replace').strip().splitlines()[-1:]}", file=stream, flush=True)
-                    second = None
                 fn(simulation)
             if stream is not None:
-                print(f"  [{k}/{len(STAGES)}] done in {time.perf_counter() - t:.1f} s", file=stream, flush=True)
+                print(f"  [{n}/{len(STAGES)}] done in {time.perf_counter() - t:.1f} s", file=stream, flush=True)
+        second = None
     finally:
         _BUSY = False
         if second is not None:  # a stage before it failed: nothing waits for the second process any more

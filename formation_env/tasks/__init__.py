@@ -15,12 +15,12 @@ step, and its own evaluation hooks (:mod:`.evaluation`); docs/custom-task.md wri
 Importing this package registers every task (and its scenario) in order; ``formation_env`` imports it.
 """
 
-from .base import (ALGORITHM_LABELS, HEADLINE_METRICS, TASKS, TEST_SEED_BASE, VALIDATION_SEED_BASE, EvaluationProtocol, Task, get_task, versus_records,
+from .base import (ALGORITHM_LABELS, HEADLINE_METRICS, TASKS, TEST_SEED_BASE, VALIDATION_SEED_BASE, EvaluationProtocol, RecordFile, Task, get_task, versus_records,
                    gym_ids, make_config, register_task, task_for_scenario, task_learning, task_names, task_options)
 from . import thesis  # noqa: F401  (registers)
 from . import close_formation  # noqa: F401
 from . import wake_surfing  # noqa: F401
 from . import n_uav_formations  # noqa: F401
 
-__all__ = ["Task", "EvaluationProtocol", "HEADLINE_METRICS", "ALGORITHM_LABELS", "versus_records", "TEST_SEED_BASE", "VALIDATION_SEED_BASE", "TASKS", "get_task", "task_names", "register_task", "task_options", "task_for_scenario", "make_config",
+__all__ = ["Task", "EvaluationProtocol", "RecordFile", "HEADLINE_METRICS", "ALGORITHM_LABELS", "versus_records", "TEST_SEED_BASE", "VALIDATION_SEED_BASE", "TASKS", "get_task", "task_names", "register_task", "task_options", "task_for_scenario", "make_config",
            "gym_ids", "task_learning"]

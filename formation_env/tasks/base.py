@@ -20,7 +20,7 @@ from ..scenarios import Scenario, get_scenario, register_scenario
 from ..sim.config import EnvConfig, Randomisation, RewardWeights
 from .terms import TaskTerms
 
-__all__ = ["Task", "EvaluationProtocol", "ALGORITHM_LABELS", "versus_records", "register_task", "get_task", "task_names", "TASKS", "task_options",
+__all__ = ["Task", "EvaluationProtocol", "RecordFile", "levels_record", "ALGORITHM_LABELS", "versus_records", "register_task", "get_task", "task_names", "TASKS", "task_options",
            "task_for_scenario", "make_config", "gym_ids", "task_learning", "TEST_SEED_BASE", "VALIDATION_SEED_BASE",
            "HEADLINE_METRICS"]
 
@@ -53,6 +53,28 @@ def versus_records(folder, task_name: str) -> list:
 
 
 @dataclass(frozen=True)
+class RecordFile:
+    """One committed record of a task's results (``file`` in ``train/policies/``): the ``path`` of keys inside it to
+    a mapping policy -> its episodes at each turbulence level of ``levels`` (m/s); a key's ``{sigma}`` is the level
+    written as ``f"{sigma:g}"``. The results page and the absolute metric read a task's episodes from its records."""
+
+    file: str
+    path: tuple
+    levels: tuple = (1.0,)
+
+    def keys_at(self, sigma: float) -> tuple:
+        """The path of keys to the episodes at level ``sigma``."""
+        return tuple(k.format(sigma=f"{sigma:g}") if isinstance(k, str) else k for k in self.path)
+
+
+def levels_record(file: str, levels: tuple, task: str | None = None, index: int = 0) -> RecordFile:
+    """A record written by ``formation-env publish levels``: a one-task record (``task`` None), or record ``index``
+    of ``task`` in a record of several."""
+    by_level = ("by_level", "sigma_{sigma}", "episodes")
+    return RecordFile(file, by_level if task is None else ("records", task, index) + by_level, levels)
+
+
+@dataclass(frozen=True)
 class EvaluationProtocol:
     """How a task's results are made: ``episodes`` held-out episodes per turbulence level (``levels``, the
     frozen von Karman field's sigma in m/s) on the seeds ``seed_base``, ``seed_base + 1``, ...; ``metric`` the
@@ -60,7 +82,13 @@ class EvaluationProtocol:
     EnvConfig options of the test episodes where they are not the generic test distribution (the benchmark
     task's reward, its randomisation at the level, the saving computed): a task whose episodes draw more than
     the turbulence (wake_surfing's crosswind and leader manoeuvre). None: the generic distribution, the
-    scenario with the task's ``test_randomisation``."""
+    scenario with the task's ``test_randomisation``. ``records``: the committed records its results page reads
+    (:class:`RecordFile`, in the order a later one's runs replace an earlier one's of the same name);
+    ``absolute``: whether its learned methods are also flown on the absolute metric's 1,000 further episodes
+    (``formation-env results --absolute``). ``ppo_record_score``: the task's committed PPO evaluation at sigma 1
+    (``<task>_ppo_setpoints_evaluation.json``: ``formation-env publish committed``, or the task's own evaluation)
+    and the per-episode score it enters the table across tasks of ``formation-env publish recompute`` with (a key
+    of ``train.evaluation.aggregates.SCORES``); None: the task has no such record."""
 
     levels: tuple = (0.0, 1.0, 1.5)
     headline_level: float = 1.0
@@ -68,6 +96,9 @@ class EvaluationProtocol:
     seed_base: int = TEST_SEED_BASE
     metric: str = "rms_slot_error_m"
     preset: dict | None = None
+    records: tuple = ()
+    absolute: bool = False
+    ppo_record_score: str | None = None
 
     def __post_init__(self) -> None:
         if self.metric not in HEADLINE_METRICS:
@@ -77,6 +108,12 @@ class EvaluationProtocol:
                              f"{self.levels!r}")
         if not 1 <= self.episodes <= 100_000:
             raise ValueError(f"EvaluationProtocol.episodes must be in [1, 100000], got {self.episodes!r}")
+        if self.ppo_record_score is not None and not (isinstance(self.ppo_record_score, str) and self.ppo_record_score):
+            raise ValueError(f"EvaluationProtocol.ppo_record_score must be a score name or None, got "
+                             f"{self.ppo_record_score!r}")
+        for r in self.records:
+            if not isinstance(r, RecordFile):
+                raise ValueError(f"EvaluationProtocol.records must hold RecordFile objects, got {r!r}")
         if not 2**32 <= self.seed_base <= 2**62:
             raise ValueError(f"EvaluationProtocol.seed_base must be in [2**32, 2**62] (never a training seed), "
                              f"got {self.seed_base!r}")

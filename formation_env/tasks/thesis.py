@@ -11,8 +11,10 @@ spans from the leader, and charging every collision made the policy hang back be
 
 from __future__ import annotations
 
+import dataclasses
+
 from ..sim.config import Randomisation, RewardWeights
-from .base import EvaluationProtocol, Task, register_task
+from .base import EvaluationProtocol, RecordFile, Task, levels_record, register_task
 
 __all__ = ["THESIS_TASKS", "THESIS_RANDOMISATION"]
 
@@ -24,11 +26,16 @@ _RMS = EvaluationProtocol(levels=(0.0, 1.0, 1.5), metric="rms_slot_error_m")
 THESIS_TASKS = tuple(register_task(t) for t in (
     Task("formation_keeping", "formation_keeping", "formation_env/FormationKeeping", 1,
          options={**_BASE, "reward": RewardWeights(separation=25.0, barrier_separation_b=1.5)},
-         description="6.5: hold the slot 2 spans behind, 1 starboard, 0.3 below", evaluation=_RMS),
+         description="6.5: hold the slot 2 spans behind, 1 starboard, 0.3 below",
+         evaluation=dataclasses.replace(_RMS, ppo_record_score="rms_slot_error_m", records=(
+             RecordFile("formation_keeping_ppo_setpoints_evaluation.json", ("policies",)),))),
     Task("reconfiguration", "reconfiguration", "formation_env/Reconfiguration", 1,
          options={**_BASE, "reward": RewardWeights(terminal_forfeit=0.0)},
          description="6.6: follow the slot schedule from behind to ahead of the leader",
-         evaluation=EvaluationProtocol(levels=(0.0, 1.0, 1.5), metric="reconfig_success")),
+         evaluation=EvaluationProtocol(levels=(0.0, 1.0, 1.5), metric="reconfig_success", absolute=True,
+                                       ppo_record_score="reconfig_success", records=(
+             RecordFile("reconfiguration_ppo_setpoints_evaluation.json", ("policies",)),
+             levels_record("reconfiguration_algorithms_levels.json", (1.0, 0.0, 1.5))))),
     Task("gust", "gust", "formation_env/Gust", 0, options=dict(_BASE), baselines=("pid",),
          description="6.4: fly through the gusts", evaluation=_RMS),
     Task("tracking", "tracking", "formation_env/Tracking", 0, options=dict(_BASE), baselines=("pid",),

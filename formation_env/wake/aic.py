@@ -8,7 +8,7 @@ import numba as nb
 import numpy as np
 
 from .biot_savart import (CORE_NONE, branch, branch_cored, core_radius, leg, leg_cored, leg_sheet_framed, point_to_knots,
-                          point_to_knots3, sheet_strip_frames)
+                          point_to_knots3, sheet_on, sheet_strip_frames)
 from . import lanes
 from .lanes import KMAX
 from .posing import bound_length, branch_directions, to_ned
@@ -193,7 +193,7 @@ def assemble_scalar(lat, posed, aic, gamma, vcross, sheet=None):
         for i in range(3):
             nrm[i] = rot[vj, 0, i] * normal_b[j, 0] + rot[vj, 1, i] * normal_b[j, 1] + rot[vj, 2, i] * normal_b[j, 2]
         recv_w = 0.0
-        if sheet is not None:
+        if sheet_on(sheet):
             recv_w = bound_length(x1, panel_left_knot[j])
         # surface by surface (a surface's knots are contiguous): the own/other decision, the source's leg direction
         # and the core radius once per surface and control point, not per knot
@@ -215,7 +215,7 @@ def assemble_scalar(lat, posed, aic, gamma, vcross, sheet=None):
             if aic_core_mode != CORE_NONE:
                 rc = core_radius(cp[0], cp[1], cp[2], origin, srf, airspeed[src], surface_core_scale, aic_core_mode, nu)
             for k in range(k0, k1):
-                if sheet is not None:
+                if sheet_on(sheet):
                     lx, ly, lz = leg_sheet_framed(tx, ty, tz, r3[k, 0], r3[k, 1], r3[k, 2], inv3[k], cutoff, rc,
                                                   overlap_core, frames[k], recv_w)
                 else:
@@ -264,7 +264,7 @@ def assemble_lanes(lat, posed, aic, gamma, vcross, sheet=None):
     frames = sheet_strip_frames(sheet, trail, x3, knot_vehicle, knot_surface)
     s = lanes.lane_scratch()
     lanes.load_knots(s, x1, x3, chord_dir, bound_dir, trail, knot_vehicle, frames, sheet)
-    sheet_on = sheet is not None
+    on = sheet_on(sheet)
     # without the overlap core every lane takes the scalar law (its plain form is another law)
     ro2 = overlap_core * overlap_core if overlap_core > 0.0 else np.inf
     vk0, vk1 = lanes.vehicle_knot_ranges(knot_vehicle, pos.shape[0])
@@ -276,14 +276,14 @@ def assemble_lanes(lat, posed, aic, gamma, vcross, sheet=None):
         n1 = rot[vj, 0, 1] * normal_b[j, 0] + rot[vj, 1, 1] * normal_b[j, 1] + rot[vj, 2, 1] * normal_b[j, 2]
         n2 = rot[vj, 0, 2] * normal_b[j, 0] + rot[vj, 1, 2] * normal_b[j, 1] + rot[vj, 2, 2] * normal_b[j, 2]
         recv_w = 0.0
-        if sheet is not None:
+        if sheet_on(sheet):
             recv_w = bound_length(x1, panel_left_knot[j])
         a, b = vk0[vj], vk1[vj]
         lanes.own_legs(s, a, b, px, py, pz, n0, n1, n2, cutoff)
         lanes.fill_core_radius(s, px, py, pz, vj, origin, airspeed, knot_vehicle, surface_knot_start,
                                surface_core_scale, aic_core_mode, nu)
-        lanes.other_llines(s, 0, a, px, py, pz, n0, n1, n2, cutoff, ro2, recv_w, sheet_on)
-        lanes.other_llines(s, b, n_knots, px, py, pz, n0, n1, n2, cutoff, ro2, recv_w, sheet_on)
+        lanes.other_llines(s, 0, a, px, py, pz, n0, n1, n2, cutoff, ro2, recv_w, on)
+        lanes.other_llines(s, b, n_knots, px, py, pz, n0, n1, n2, cutoff, ro2, recv_w, on)
         lanes.fix_llines(s, 0, a, px, py, pz, n0, n1, n2, x1, x3, chord_dir, trail, knot_vehicle, cutoff,
                          overlap_core, frames, recv_w, sheet)
         lanes.fix_llines(s, b, n_knots, px, py, pz, n0, n1, n2, x1, x3, chord_dir, trail, knot_vehicle, cutoff,

@@ -7,7 +7,9 @@ import numpy as np
 
 import numba as nb
 
+from .biot_savart import SHEET_OFF
 from .kernels import CORE_NONE, SHEET_ON, evaluate_one
+from .residual import NO_TABLE
 from .structs import LatticeArrays, WakeArrays
 
 __all__ = ["LatticeArrays", "WakeArrays", "lattice_arrays", "wake_arrays", "evaluate_formation"]
@@ -30,9 +32,10 @@ def lattice_arrays(model) -> LatticeArrays:
 def wake_arrays(model, wing_origin_body) -> WakeArrays:
     """The struct of ``model`` (a WakeModel) with the wing origin relative to the CG (body axes, m)."""
     return WakeArrays(
-        lattice=lattice_arrays(model), sheet=SHEET_ON if model.sheet else None,
+        lattice=lattice_arrays(model), sheet=SHEET_ON if model.sheet else SHEET_OFF,
         wing_origin_body=np.ascontiguousarray(wing_origin_body, dtype=float), n_panels=int(model.n_panels),
-        saving_scale=float(getattr(model, "saving_scale", 1.0)), residual=getattr(model, "residual", None))
+        saving_scale=float(getattr(model, "saving_scale", 1.0)),
+        residual=NO_TABLE if getattr(model, "residual", None) is None else model.residual)
 
 
 @nb.njit(cache=True, error_model="numpy")

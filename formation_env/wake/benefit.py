@@ -29,7 +29,7 @@ import numpy as np
 from . import lanes
 from .arrays import evaluate_formation
 from .aic import assemble_and_solve, lu_solve_inplace
-from .biot_savart import branch, leg, point_to_knots, sheet_strip_frames
+from .biot_savart import branch, leg, point_to_knots, sheet_on, sheet_strip_frames
 from .kernels import CORE_NONE, field_velocity, posed_lattice
 from .residual import add_saving_residual
 
@@ -80,7 +80,7 @@ def induced_drag_one(wake, gamma, pos, euler, speed, alpha, beta, out_drag, air_
         # Own horseshoes: the solve's law (plain, cutoff); the others': the field law (viscous core).
         ox, oy, oz = field_velocity(mx, my, mz, v, True, lat, posed, gamma, CORE_NONE, 0.0)
         ex, ey, ez = field_velocity(mx, my, mz, v, False, lat, posed, gamma, lat.core_mode, lat.overlap_core_m,
-                                    wake.sheet, 0.0 if wake.sheet is None else np.sqrt(lx * lx + ly * ly + lz * lz),
+                                    wake.sheet, 0.0 if not sheet_on(wake.sheet) else np.sqrt(lx * lx + ly * ly + lz * lz),
                                     frames)
         _add_kutta_joukowski(f, v, air_density * gamma[j], vel[v, 0], vel[v, 1], vel[v, 2], ox, oy, oz, ex, ey, ez,
                              lx, ly, lz)
@@ -339,13 +339,13 @@ def induced_drags_one(wake, wake_alone, pos, euler, speed, alpha, beta, gamma_fo
             lanes.own_field_bounds(s, a, b - 1, mx, my, mz, cutoff)
             ox, oy, oz, ax, ay, az = _own_pair_sum(s, v, gamma_formation, gamma_alone, lat.surface_vehicle,
                                                    lat.surface_knot_start, lat.surface_panel_start)
-            recv_w = 0.0 if wake.sheet is None else np.sqrt(lx * lx + ly * ly + lz * lz)
+            recv_w = 0.0 if not sheet_on(wake.sheet) else np.sqrt(lx * lx + ly * ly + lz * lz)
             lanes.fill_core_radius(s, mx, my, mz, v, origin, speed, lat.knot_vehicle, lat.surface_knot_start,
                                    lat.surface_core_scale, lat.core_mode, lat.kinematic_viscosity)
             for rng in range(2):
                 lo = 0 if rng == 0 else b
                 hi = a if rng == 0 else n_knots
-                lanes.other_llines(s, lo, hi, mx, my, mz, 0.0, 0.0, 0.0, cutoff, ro2, recv_w, wake.sheet is not None)
+                lanes.other_llines(s, lo, hi, mx, my, mz, 0.0, 0.0, 0.0, cutoff, ro2, recv_w, sheet_on(wake.sheet))
                 lanes.fix_llines(s, lo, hi, mx, my, mz, 0.0, 0.0, 0.0, x1, x3, chord_dir, trail, lat.knot_vehicle,
                                  cutoff, lat.overlap_core_m, frames, recv_w, wake.sheet)
                 if hi - lo > 1:
@@ -368,7 +368,7 @@ def induced_drags_one(wake, wake_alone, pos, euler, speed, alpha, beta, gamma_fo
         ox, oy, oz, ax, ay, az = _own_field_pair(mx, my, mz, v, lat, posed, gamma_formation, gamma_alone)
         ex, ey, ez = field_velocity(mx, my, mz, v, False, lat, posed, gamma_formation, lat.core_mode,
                                     lat.overlap_core_m, wake.sheet,
-                                    0.0 if wake.sheet is None else np.sqrt(lx * lx + ly * ly + lz * lz), frames)
+                                    0.0 if not sheet_on(wake.sheet) else np.sqrt(lx * lx + ly * ly + lz * lz), frames)
         _add_kutta_joukowski(f, v, air_density * gamma_formation[j], vel[v, 0], vel[v, 1], vel[v, 2], ox, oy, oz,
                              ex, ey, ez, lx, ly, lz)
         # alone: no other vehicle (the separate solve adds the empty others' field, 0.0, as here)

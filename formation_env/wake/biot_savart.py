@@ -15,7 +15,7 @@ import numpy as np
 __all__ = ["branch", "branch_cored", "leg", "leg_cored", "core_radius", "point_to_knots", "point_to_knots3", "segment_velocity", "leg_velocity",
            "FOUR_PI", "CORE_NONE", "CORE_LAMB_OSEEN", "CORE_KURYLOWICH", "LAMB_OSEEN_C", "KURYLOWICH_C",
            "OVERLAP_CORE_CHORD_FRACTION", "CORE_PEAK", "leg_sheet", "leg_sheet_framed", "strip_frame", "strip_frames",
-           "STRIP_COLUMNS", "sheet_strip_frames", "SHEET_BLEND_INNER", "SHEET_ON",
+           "STRIP_COLUMNS", "sheet_strip_frames", "SHEET_BLEND_INNER", "SHEET_ON", "SHEET_OFF", "sheet_on",
            "SHEET_BLEND_OUTER"]
 
 FOUR_PI = 4.0 * math.pi
@@ -40,10 +40,12 @@ OVERLAP_CORE_CHORD_FRACTION = 1.0
 # as exp(-2 pi rho / w) (1e-8 at 3 widths), so nothing beyond is changed (docs/ell.md "Converged saving").
 SHEET_BLEND_INNER = 4.0
 SHEET_BLEND_OUTER = 6.0
-# The kernels' switch for the sheet law: None (the thesis's legs) or this float. A switch by *type*: numba
-# compiles the None case without the law's code or branches (a bool switched at run time slows the thesis
-# path).
+# The kernels' switch for the sheet law, a float: SHEET_ON, or SHEET_OFF for the thesis's legs. A value rather than
+# a type, so that one compiled kernel serves both: the vectorised lane loops take it as a mask, the scalar laws as a
+# branch, and neither slows the thesis's path. None is the thesis's too (:func:`sheet_on`), for callers of the
+# kernels that pass no switch.
 SHEET_ON = 1.0
+SHEET_OFF = 0.0
 # max over x of (1 - exp(-1.26 x^2)) / x (at x ~ 1.0): the peak of the cored law is
 # CORE_PEAK / (2 pi rc) per unit strength for a semi-infinite or a finite straight branch.
 CORE_PEAK = 0.71635
@@ -225,12 +227,22 @@ def strip_frames(trail, x3, knot_vehicle, knot_surface, out):
                     k < n_knots - 1 and knot_surface[k + 1] == knot_surface[k], out[k])
 
 
+@_jit_inline
+def sheet_on(sheet):
+    """Whether the kernels' ``sheet`` switch (:data:`SHEET_ON`, :data:`SHEET_OFF` or None) turns the sheet law
+    on: None compiles to a constant False."""
+    if sheet is None:
+        return False
+    return sheet != SHEET_OFF
+
+
 @_jit
 def sheet_strip_frames(sheet, trail, x3, knot_vehicle, knot_surface):
     """The strips of a posed lattice's knots for the kernels' ``sheet`` switch: :func:`strip_frames` in a new (K,
-    STRIP_COLUMNS) array with the sheet law (``sheet`` a float), an empty (0, STRIP_COLUMNS) one without it (None)."""
-    out = np.empty((x3.shape[0] if sheet is not None else 0, STRIP_COLUMNS))
-    if sheet is not None:
+    STRIP_COLUMNS) array with the sheet law on (:func:`sheet_on`), an empty (0, STRIP_COLUMNS) one without it."""
+    on = sheet_on(sheet)
+    out = np.empty((x3.shape[0] if on else 0, STRIP_COLUMNS))
+    if on:
         strip_frames(trail, x3, knot_vehicle, knot_surface, out)
     return out
 

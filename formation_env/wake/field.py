@@ -7,7 +7,7 @@ from __future__ import annotations
 import numba as nb
 
 from .biot_savart import (CORE_NONE, branch_cored, core_radius, leg_cored, leg_sheet, leg_sheet_framed, point_to_knots,
-                          sheet_strip_frames)
+                          sheet_on, sheet_strip_frames)
 from .posing import posed_lattice
 from .structs import LatticeArrays
 
@@ -30,8 +30,9 @@ def field_velocity(px, py, pz, vehicle_filter, keep_only, lat, posed, gamma, cor
     about the source's lifting surface and the legs a core of at least the cutoff
     (:func:`branch_cored`, :func:`leg_cored`), so |v| <= CORE_PEAK / (2 pi min(overlap_core, cutoff))
     per unit strength and branch at any point; callers pass it for the *other* vehicles' field and 0
-    for a vehicle's own field (the solve's law). ``sheet`` a float (not None; a compile-time switch as in
-    :func:`formation_env.wake.aic.assemble_and_solve`): the trailing legs take the sheet law
+    for a vehicle's own field (the solve's law). ``sheet`` the switch of
+    :func:`formation_env.wake.aic.assemble_and_solve` (:func:`~formation_env.wake.biot_savart.sheet_on`): on, the
+    trailing legs take the sheet law
     near their wake plane (:func:`leg_sheet`), averaged over a receiving segment of width ``recv_w``
     (m; 0: at the point); passed, like ``overlap_core``, for the other vehicles' field. ``frames`` (K,
     STRIP_COLUMNS) or None: the knots' strips (:func:`~formation_env.wake.biot_savart.strip_frames` of this
@@ -66,10 +67,10 @@ def field_velocity(px, py, pz, vehicle_filter, keep_only, lat, posed, gamma, cor
             if k > k0:
                 g -= gamma[p0 + (k - k0) - 1]
             if g != 0.0:
-                if sheet is not None and frames is not None:
+                if sheet_on(sheet) and frames is not None:
                     lx, ly, lz = leg_sheet_framed(t[0], t[1], t[2], r3[k, 0], r3[k, 1], r3[k, 2], inv3[k], cutoff, rc,
                                                   overlap_core, frames[k], recv_w)
-                elif sheet is not None:
+                elif sheet_on(sheet):
                     lx, ly, lz = leg_sheet(t[0], t[1], t[2], r3[k, 0], r3[k, 1], r3[k, 2], inv3[k], cutoff, rc, overlap_core,
                                            x3, k, k > k0, k < k1 - 1, recv_w)
                 else:

@@ -28,7 +28,7 @@ import numpy as np
 from .aic import assemble_and_solve, lu_solve_inplace, static_aic
 from .biot_savart import (_MIN_CORE_M, _TINY_H, CORE_KURYLOWICH, CORE_LAMB_OSEEN, CORE_NONE, CORE_PEAK,  # noqa: F401
                           FOUR_PI, KURYLOWICH_C, LAMB_OSEEN_C, OVERLAP_CORE_CHORD_FRACTION, branch, branch_cored,
-                          core_radius, sheet_strip_frames, leg, leg_velocity, point_to_knots, segment_velocity, SHEET_ON)
+                          core_radius, sheet_on, sheet_strip_frames, leg, leg_velocity, point_to_knots, segment_velocity, SHEET_ON)
 from .field import field_velocity, field_velocity_batch
 from .posing import bound_length, branch_directions, dcm_ned_to_body_1, place_lattice, posed_lattice, to_ned
 from .structs import LatticeArrays
@@ -53,8 +53,8 @@ def evaluate_one(lat, pos, euler, airspeed, alpha, beta, gamma_out, vpts_out, wi
     see :func:`formation_env.wake.field.field_velocity`). Poses and air data (V, ...) as
     :func:`~formation_env.wake.posing.posed_lattice`'s; the outputs: circulation (N,), induced velocity at the
     evaluation points (N, 3) NED, and per vehicle (V, 3) the wind NED and body and the rotational wind body and NED.
-    ``sheet`` (None: the thesis; a float, :data:`SHEET_ON`: a compile-time switch): the other vehicles' trailing
-    legs take the sheet law near their wake plane in the solve and the field (``WakeModel.sheet``). ``keep``: see
+    ``sheet`` (:data:`SHEET_ON`; :data:`~formation_env.wake.biot_savart.SHEET_OFF` or None: the thesis): the other
+    vehicles' trailing legs take the sheet law near their wake plane in the solve and the field (``WakeModel.sheet``). ``keep``: see
     :func:`formation_env.wake.aic.assemble_and_solve`."""
     panel_left_knot, panel_vehicle, control_b, eval_b = lat.panel_left_knot, lat.panel_vehicle, lat.control_b, lat.eval_b
     core_mode, aic_core_mode, overlap_core = lat.core_mode, lat.aic_core_mode, lat.overlap_core_m
@@ -91,7 +91,7 @@ def evaluate_one(lat, pos, euler, airspeed, alpha, beta, gamma_out, vpts_out, wi
             v = panel_vehicle[j]
             to_ned(rot[v], pos[v], eval_b[j], pt)
             recv_w = 0.0
-            if sheet is not None:
+            if sheet_on(sheet):
                 recv_w = bound_length(x1, panel_left_knot[j])
             wx, wy, wz = field_velocity(pt[0], pt[1], pt[2], v, False, lat, posed, gamma_out, core_mode, overlap_core,
                                         sheet, recv_w, frames)

@@ -28,7 +28,7 @@ import numba as nb
 import numpy as np
 
 from .biot_savart import (_TINY_H, CORE_NONE, FOUR_PI, SHEET_BLEND_OUTER, STRIP_OK, STRIP_W, branch_cored, core_radius,
-                          leg_cored, leg_sheet_framed)
+                          leg_cored, leg_sheet_framed, sheet_on)
 
 __all__ = ["KMAX", "N_ROWS", "lane_scratch", "load_knots", "vehicle_knot_ranges", "own_legs", "other_llines",
            "fix_llines", "other_bounds", "fix_bounds", "fill_core_radius", "own_panel_row", "other_panel_row",
@@ -73,7 +73,7 @@ def load_knots(s, x1, x3, chord_dir, bound_dir, trail, knot_vehicle, frames, she
         s[CDX + k], s[CDY + k], s[CDZ + k] = chord_dir[k, 0], chord_dir[k, 1], chord_dir[k, 2]
         s[BDX + k], s[BDY + k], s[BDZ + k] = bound_dir[k, 0], bound_dir[k, 1], bound_dir[k, 2]
         s[TX + k], s[TY + k], s[TZ + k] = trail[v, 0], trail[v, 1], trail[v, 2]
-        if sheet is not None:
+        if sheet_on(sheet):
             s[SW + k] = frames[k, STRIP_W]
             s[SOK + k] = frames[k, STRIP_OK]
         else:
@@ -143,11 +143,11 @@ def fill_core_radius(s, px, py, pz, vj, origin, airspeed, knot_vehicle, surface_
 
 
 @_jit
-def other_llines(s, k0, k1, px, py, pz, n0, n1, n2, cutoff, ro2, recv_w, sheet_on):
+def other_llines(s, k0, k1, px, py, pz, n0, n1, n2, cutoff, ro2, recv_w, sheet_law):
     """Another vehicle's knots k0..k1-1 seen from P: I1 = 1 / |P - X1|, LW and CW the normal velocity of the trailing
     leg (from X3, :func:`~formation_env.wake.biot_savart.leg_cored`) and the chordwise branch X3 -> X1
     (:func:`~formation_env.wake.biot_savart.branch_cored`), LCX..LCZ their difference (chordwise - leg), in their
-    fast form; LM 1.0 where that form is not the law's (a core factor below 1, the sheet region), for
+    fast form; LM 1.0 where that form is not the law's (a core factor below 1, the sheet region when ``sheet_law``), for
     :func:`fix_llines`. ``ro2`` the overlap core squared (inf: no overlap core, every lane flagged)."""
     for k in range(np.uint64(k0), np.uint64(k1)):
         bx = px - s[U_X1X + k]
@@ -204,7 +204,7 @@ def other_llines(s, k0, k1, px, py, pz, n0, n1, n2, cutoff, ro2, recv_w, sheet_o
         # the scalar laws' own tests, non-short-circuit so that the loop stays branch-free
         outer = SHEET_BLEND_OUTER * max(s[U_SW + k], recv_w)
         rp2 = max(a2 - ta * ta, 0.0)
-        in_sheet = sheet_on & (s[U_SOK + k] != 0.0) & (rp2 < outer * outer)
+        in_sheet = sheet_law & (s[U_SOK + k] != 0.0) & (rp2 < outer * outer)
         fast = ((xcore > 40.0) | (h2 < _TINY2)) & (1.26 * a2 > 40.0 * ro2) & ((1.26 * rho2 > 40.0 * ro2) | (g2 < _TINY2))
         s[U_LM + k] = 0.0 if (fast & ~in_sheet) else 1.0
 
@@ -213,7 +213,7 @@ def other_llines(s, k0, k1, px, py, pz, n0, n1, n2, cutoff, ro2, recv_w, sheet_o
 def fix_llines(s, k0, k1, px, py, pz, n0, n1, n2, x1, x3, chord_dir, trail, knot_vehicle, cutoff, overlap_core,
                frames, recv_w, sheet):
     """The flagged lanes of :func:`other_llines` (k0..k1-1) by the scalar laws, exactly as the scalar assembly
-    evaluates them (``sheet`` the kernels' compile-time switch, :data:`formation_env.wake.biot_savart.SHEET_ON`)."""
+    evaluates them (``sheet`` the kernels' switch, :func:`formation_env.wake.biot_savart.sheet_on`)."""
     for k in range(k0, k1):
         if s[LM + k] == 0.0:
             continue
@@ -222,7 +222,7 @@ def fix_llines(s, k0, k1, px, py, pz, n0, n1, n2, x1, x3, chord_dir, trail, knot
         ax, ay, az = px - x3[k, 0], py - x3[k, 1], pz - x3[k, 2]
         na = math.sqrt(ax * ax + ay * ay + az * az)
         ia = 1.0 / na if na > 0.0 else 0.0
-        if sheet is not None:
+        if sheet_on(sheet):
             lx, ly, lz = leg_sheet_framed(tx, ty, tz, ax, ay, az, ia, cutoff, s[RC + k], overlap_core, frames[k],
                                           recv_w)
         else:

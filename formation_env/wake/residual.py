@@ -51,7 +51,7 @@ import numpy as np
 
 __all__ = ["ResidualTable", "TABLE_PATH", "VALUE_SAVING", "VALUE_WIND", "N_VALUES",
            "TableGrid", "load_table", "save_table", "table_from_arrays", "pair_residual", "add_wind_residual",
-           "add_saving_residual", "lift_per_rho_v"]
+           "add_saving_residual", "lift_per_rho_v", "NO_TABLE", "table_on"]
 
 VALUE_SAVING = 0
 VALUE_WIND = 1  # 6 values: the load-weighted translational (3) m/s and rotational (3) rad/s wind, pair frame
@@ -77,9 +77,22 @@ class ResidualTable(NamedTuple):
     source_lift_m3ps: float  # the table's source: sum of Gamma times spanwise bound extent at the trim, m^3/s
 
 
+#: no residual table: an empty table of the same type, so that the kernels compile once for the lattice and the
+#: converged wake (:func:`table_on` is False for it)
+NO_TABLE = ResidualTable(np.zeros(0), 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, np.zeros((0, 0, 0, 0, N_VALUES)), 1.0, 1.0)
+
+
 # ---------------------------------------------------------------------------------------------------------------
 # Compiled: lookup and application
 # ---------------------------------------------------------------------------------------------------------------
+
+@_jit
+def table_on(tab):
+    """Whether ``tab`` is a residual table to apply: False for None and :data:`NO_TABLE`."""
+    if tab is None:
+        return False
+    return tab.x_b.shape[0] > 0
+
 
 @_jit
 def lift_per_rho_v(wake, gamma, v):
@@ -190,9 +203,11 @@ def _pair_frame(euler, pos, s, r, span_m):
 def add_wind_residual(wake, tab, pos, euler, gamma, rot, wind_ned, wind_b, omega_b, omega_ned):
     """Adds every ordered pair's wind residual (``tab``'s :data:`VALUE_WIND` block, scaled by the source's lift
     per rho V over the table's) to the load-weighted translational and rotational wind of each receiving vehicle,
-    NED and body; ``tab`` None: nothing (pruned when compiled). ``rot`` (V, 3, 3) NED -> body of each vehicle;
+    NED and body; ``tab`` None or :data:`NO_TABLE`: nothing. ``rot`` (V, 3, 3) NED -> body of each vehicle;
     the rest as :func:`formation_env.wake.coupling.coupled_wind`'s."""
-    if tab is None:
+    if tab is None:  # pruned when compiled
+        return
+    if not table_on(tab):
         return
     nv = pos.shape[0]
     res = np.empty(6)
@@ -229,8 +244,10 @@ def add_wind_residual(wake, tab, pos, euler, gamma, rot, wind_ned, wind_b, omega
 @_jit
 def add_saving_residual(tab, pos, euler, saving):
     """Adds every ordered pair's saving residual to each receiving vehicle's induced-drag saving (V,); ``tab``
-    None: nothing (pruned when compiled). ``pos`` (V, 3) wing origins NED, m; ``euler`` (V, 3) rad."""
-    if tab is None:
+    None or :data:`NO_TABLE`: nothing. ``pos`` (V, 3) wing origins NED, m; ``euler`` (V, 3) rad."""
+    if tab is None:  # pruned when compiled
+        return
+    if not table_on(tab):
         return
     nv = pos.shape[0]
     res = np.empty(1)

@@ -70,10 +70,10 @@ class WakeArrays(NamedTuple):
     lattice and the switches and corrections the solve, the coupling and the saving read."""
 
     lattice: LatticeArrays
-    sheet: float | None  # SHEET_ON: the other vehicles' trailing legs take the sheet law (WakeModel.sheet); None: the
-    #                      thesis (a switch by type: each compiles its own kernels, the thesis's without the law)
+    sheet: float  # SHEET_ON: the other vehicles' trailing legs take the sheet law (WakeModel.sheet); SHEET_OFF: the
+    #               thesis (a value, not a type: the thesis and the energy tasks share one compiled decision step)
     wing_origin_body: np.ndarray  # (3,) wing root quarter chord relative to the CG, body axes, m
     n_panels: int
     saving_scale: float  # factor on the induced-drag saving (WakeModel.saving_scale; 1.0: the thesis)
-    residual: object  # None, or the residual table of pairs (formation_env.wake.residual.ResidualTable; WakeModel.residual):
-    #                   a switch by type, as sheet
+    residual: object  # the residual table of pairs (formation_env.wake.residual.ResidualTable; WakeModel.residual), or
+    #                   formation_env.wake.residual.NO_TABLE (none; the same type, so the same compiled kernels)

@@ -13,13 +13,16 @@ train/hyperparams/ppo.yml and mappo.yml, and each training example's smoke model
 
 from __future__ import annotations
 
+import contextlib
 import importlib.util
 import os
 import re
 import shutil
+import signal
 import subprocess
 import sys
 import tempfile
+import time
 from pathlib import Path
 
 import pytest
@@ -196,6 +199,9 @@ def test_torchrl_close_formation(workdir):
     assert "GymEnv('formation_env/CloseFormation-v" in out
 
 
+RAY_EXIT_DEADLINE_S = 90.0
+
+
 def _ray_processes(tmpdir: str) -> list[int]:
     """Processes started with RAY_TMPDIR = ``tmpdir`` (every Ray process of the example's instance)."""
     pids = []
@@ -217,9 +223,18 @@ def _run_rllib(workdir, *args) -> str:
     try:
         out = run_example("rllib_vee5.py", workdir, "--out", "run", *args, env={"RAY_TMPDIR": ray_tmp}, timeout=400)
     finally:
+        # Ray's own processes (raylet, GCS, workers) exit after the driver's ray.shutdown() returns, on their own
+        # schedule: on a busy machine several seconds later. A process still there after the deadline is left behind.
+        deadline = time.monotonic() + RAY_EXIT_DEADLINE_S
         left = _ray_processes(ray_tmp)
+        while left and time.monotonic() < deadline:
+            time.sleep(0.5)
+            left = _ray_processes(ray_tmp)
+        for pid in left:  # not to leak them into the rest of the suite
+            with contextlib.suppress(OSError):
+                os.kill(pid, signal.SIGKILL)
         shutil.rmtree(ray_tmp, ignore_errors=True)
-    assert not left, f"Ray processes left behind: {left}"
+    assert not left, f"Ray processes left behind {RAY_EXIT_DEADLINE_S:g} s after the example ended: {left}"
     return out
 
 

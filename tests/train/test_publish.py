@@ -68,8 +68,10 @@ def test_report_committed_out_writes_only_under_out(tmp_path, monkeypatch, capsy
     before = _tracked_state()
     out = tmp_path / "eval"
     assert cli_main(["publish", "committed", "--out", str(out), "--episodes", "2", "--tasks", "formation_keeping"]) == 0
-    # the test set, then the validation baselines (of every task: the curves figure shows them all)
-    assert calls == ["formation_keeping", "formation_keeping", "close_formation", "reconfiguration"]
+    # the test set, then the validation baselines (of every task, in the registry's order: the curves figure shows
+    # them all)
+    assert rc.TASKS == ("formation_keeping", "reconfiguration", "close_formation")
+    assert calls == ["formation_keeping", "formation_keeping", "reconfiguration", "close_formation"]
     assert _tracked_state() == before  # nothing tracked is touched
     for f in ("formation_keeping/results.json", "policies/formation_keeping_ppo_setpoints_evaluation.json",
               "policies/formation_keeping_ppo_setpoints_seed2.json", "figures/eval_formation_keeping_slot_error.png",

@@ -28,7 +28,7 @@ def test_every_task_with_records_is_on_the_page_with_its_version():
 
 
 def test_a_changed_record_changes_the_page(tmp_path, monkeypatch):
-    src = rp.RECORDS[0]
+    src = next(s for s in rp.RECORDS if s.task == "close_formation")
     data = json.loads((rp.POLICIES / src.file).read_text())
     node = data
     for key in src.path:
@@ -72,3 +72,35 @@ def test_the_absolute_metric_flies_each_methods_best_seed():
                 values.append(ab._point(x, c["estimator"]))
             best = max(values) if task.evaluation.higher_is_better else min(values)
             assert c["value"] == pytest.approx(best, abs=1e-6)
+
+
+def test_the_catalogue_is_the_tasks_own_records():
+    """Each task declares its committed records (EvaluationProtocol.records): the catalogue holds exactly them, one
+    source per level, and a record that is not a RecordFile is refused with the value named."""
+    from formation_env.tasks import TASKS, EvaluationProtocol, RecordFile
+
+    declared = [(t.name, s, r.file) for t in TASKS.values() for r in t.evaluation.records for s in r.levels]
+    assert [(s.task, s.sigma, s.file) for s in rp.RECORDS] == declared
+    assert RecordFile("x.json", ("by_level", "sigma_{sigma}", "episodes")).keys_at(1.5) == ("by_level", "sigma_1.5",
+                                                                                            "episodes")
+    with pytest.raises(ValueError, match="RecordFile objects, got 'x.json'"):
+        EvaluationProtocol(records=("x.json",))
+
+
+def test_the_committed_ppo_evaluations_are_the_tasks_declarations():
+    # publish recompute and publish committed read the tasks' declarations (EvaluationProtocol.ppo_record_score):
+    # each declared record exists, its score is one the aggregates know, and no other such record is left out
+    import dataclasses
+
+    from formation_env.tasks import TASKS, EvaluationProtocol
+    from train.evaluation.aggregates import SCORES
+    from train.publish import publish, recompute, report_committed
+
+    assert set(recompute.TASKS) == {n for n, t in TASKS.items() if t.evaluation.ppo_record_score}
+    on_disk = {p.name[: -len("_ppo_setpoints_evaluation.json")]
+               for p in publish.POLICIES.glob("*_ppo_setpoints_evaluation.json")}
+    assert set(recompute.TASKS) == on_disk
+    assert all(recompute.HEADLINE[t] in SCORES for t in recompute.TASKS)
+    assert set(report_committed.TASKS) == {t for t in recompute.TASKS if TASKS[t].evaluator is None}
+    with pytest.raises(ValueError, match="ppo_record_score must be a score name or None, got 3"):
+        dataclasses.replace(EvaluationProtocol(), ppo_record_score=3)

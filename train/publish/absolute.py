@@ -21,13 +21,15 @@ from pathlib import Path
 
 import numpy as np
 
+from formation_env.tasks import TASKS
+
 __all__ = ["ABSOLUTE_EPISODES", "ABSOLUTE_SEED_OFFSET", "ABSOLUTE_TASKS", "best_seeds", "absolute_record",
            "write_absolute", "absolute_path", "absolute_markdown", "absolute_episodes"]
 
 ABSOLUTE_EPISODES = 1000   # ten times the test episodes of a record
 ABSOLUTE_SEED_OFFSET = 100  # the first seed after the test episodes the best seed is chosen on
-#: the headline tasks whose learned methods carry an absolute metric
-ABSOLUTE_TASKS = ("close_formation", "echelon3", "vee5", "reconfiguration", "wake_surfing")
+#: the tasks whose learned methods are flown on the absolute metric's episodes (their EvaluationProtocol.absolute)
+ABSOLUTE_TASKS = tuple(name for name, task in TASKS.items() if task.evaluation.absolute)
 #: per-episode columns a record keeps (where the evaluation gives them)
 KEEP = ("seed", "duration_s", "harvest_ratio", "saving_ratio", "saving", "formation_saving", "rms_along_track_m",
         "rms_lateral_m", "rms_vertical_m", "min_separation_m", "collision", "reconfig_success", "reconfig_time_s")

@@ -31,12 +31,15 @@ from ..evaluation.stats import N_BOOT
 from ..evaluation.summary import summarise
 from ..evaluation import stats as _stats
 from ..evaluation.task_eval import task_groups
+from formation_env.tasks import TASKS as _TASKS
+
 from . import publish
 
-TASKS = ("formation_keeping", "close_formation", "reconfiguration", "wake_surfing")
-#: the task's headline score in the cross-task table (normalised by :func:`normalised_score`)
-HEADLINE = {"formation_keeping": "rms_slot_error_m", "close_formation": "rms_slot_error_m",
-            "reconfiguration": "reconfig_success", "wake_surfing": "saving_ratio"}
+#: each task with a committed PPO evaluation record, and its score in the cross-task table (normalised by
+#: :func:`normalised_score`): what the tasks declare (``EvaluationProtocol.ppo_record_score``), in the registry's order
+HEADLINE = {name: task.evaluation.ppo_record_score for name, task in _TASKS.items()
+            if task.evaluation.ppo_record_score is not None}
+TASKS = tuple(HEADLINE)
 
 
 def _evaluator(task: str):

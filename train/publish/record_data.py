@@ -1,7 +1,7 @@
 """The committed evaluation records as data: where each task's per-episode columns are in ``train/policies/``
-(:data:`RECORDS`), how a record's controllers are grouped and named, and :func:`collect`, which reads them. The
-results page (:mod:`train.publish.results_page`) and the absolute metric (:mod:`train.publish.absolute`) compute
-every number they show from what this module reads."""
+(:data:`RECORDS`, from each task's ``evaluation.records``), how a record's controllers are grouped and named, and
+:func:`collect`, which reads them. The results page (:mod:`train.publish.results_page`) and the absolute metric
+(:mod:`train.publish.absolute`) compute every number they show from what this module reads."""
 
 from __future__ import annotations
 
@@ -14,6 +14,7 @@ from pathlib import Path
 import numpy as np
 
 from formation_env.constants import AEROSONDE_SPAN_M
+from formation_env.tasks import TASKS
 from formation_env.tasks.base import ALGORITHM_LABELS
 
 __all__ = ["REPO", "POLICIES", "N_BOOT", "SPAN_M", "CLASSICAL", "CEILINGS", "ALIASES", "RecordSource", "RECORDS",
@@ -46,34 +47,10 @@ class RecordSource:
     path: tuple
 
 
-def _levels(task: str, file: str, key: str, index: int, sigmas=(1.0, 0.0)) -> list[RecordSource]:
-    return [RecordSource(task, s, file, ("records", key, index, "by_level", f"sigma_{s:g}", "episodes"))
-            for s in sigmas]
-
-
-RECORDS: tuple[RecordSource, ...] = (
-    *[RecordSource("close_formation", s, "close_formation_ppo_setpoints_levels.json", ("by_level", f"sigma_{s:g}", "episodes"))
-      for s in (1.0, 0.0, 0.5, 1.5)],
-    # SAC and recurrent PPO flown beside PPO and the baselines on the same episodes (train/committed_runs_65.sh)
-    *[RecordSource("close_formation", s, "close_formation_algorithms_levels.json", ("by_level", f"sigma_{s:g}", "episodes"))
-      for s in (1.0, 0.0, 0.5, 1.5)],
-    *_levels("echelon3", "echelon3_ppo_setpoints_levels.json", "echelon3", 0, (1.0,)),
-    *_levels("echelon3", "echelon3_ppo_setpoints_levels.json", "echelon3", 1, (0.0,)),
-    *_levels("vee5", "vee5_ppo_setpoints_levels.json", "vee5", 0),
-    *_levels("vee5", "vee5_mappo_setpoints_levels.json", "vee5", 0, (1.0,)),
-    *_levels("vee5", "vee5_mappo_setpoints_levels.json", "vee5", 1, (0.0,)),
-    *_levels("vee9", "vee5_ppo_setpoints_levels.json", "vee9", 0, (1.0,)),
-    *_levels("vee_rotation", "vee_rotation_ppo_setpoints_levels.json", "vee_rotation", 0, (1.0,)),
-    *_levels("vee_rotation", "vee_rotation_ppo_setpoints_levels.json", "vee_rotation", 1, (0.0,)),
-    RecordSource("reconfiguration", 1.0, "reconfiguration_ppo_setpoints_evaluation.json", ("policies",)),
-    RecordSource("formation_keeping", 1.0, "formation_keeping_ppo_setpoints_evaluation.json", ("policies",)),
-    RecordSource("wake_surfing", 0.25, "wake_surfing_ppo_setpoints_evaluation.json", ("controllers",)),
-    *[RecordSource("wake_surfing", s, "wake_surfing_ppo_setpoints_levels.json", ("levels", f"wake_surfing_sigma_{s:g}", "episodes"))
-      for s in (0.0, 1.0)],
-    *[RecordSource("wake_surfing_random_leader", s, f, ("levels", f"wake_surfing_random_leader_sigma_{s:g}", "episodes"))
-      for s in (0.25, 0.0, 1.0)
-      for f in ("wake_surfing_random_leader_ppo_setpoints_levels.json", "wake_surfing_ppo_setpoints_levels.json")],
-)
+#: every registered task's committed records (its EvaluationProtocol.records), one source per level
+RECORDS: tuple[RecordSource, ...] = tuple(
+    RecordSource(task.name, sigma, rec.file, rec.keys_at(sigma))
+    for task in TASKS.values() for rec in task.evaluation.records for sigma in rec.levels)
 
 
 def _columns(episodes) -> dict[str, np.ndarray]:

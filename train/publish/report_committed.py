@@ -28,13 +28,18 @@ import sys
 from pathlib import Path
 
 from formation_env.io import atomic_write, atomic_write_json
+from formation_env.tasks import TASKS as _TASKS
 
 from ..config import VALIDATION_SEED_BASE
 from ..evaluation.evaluate import MAX_EPISODES, evaluate
 from . import publish
 from .publish import attach_evaluation, plot_validation_curves
 
-TASKS = ("formation_keeping", "close_formation", "reconfiguration")
+#: the tasks whose committed PPO evaluation this command writes: those with such a record
+#: (``EvaluationProtocol.ppo_record_score``) and the generic evaluation (a task with its own, wake_surfing, writes
+#: its record with ``formation-env publish records``)
+TASKS = tuple(name for name, task in _TASKS.items()
+              if task.evaluation.ppo_record_score is not None and task.evaluator is None)
 FIGURES = Path(__file__).resolve().parents[2] / "docs" / "figures"
 DEFAULT_OUT = "results/committed-eval"
 

@@ -17,7 +17,7 @@ from __future__ import annotations
 
 from ...scenarios import Scenario, SlotSchedule
 from ...sim.config import Randomisation, RewardWeights
-from ..base import EvaluationProtocol, Task, register_task
+from ..base import EvaluationProtocol, Task, levels_record, register_task
 from . import optimum as _optimum
 
 __all__ = ["SCENARIO", "TASK", "CLOSE_FORMATION_REWARD", "CLOSE_FORMATION_RANDOMISATION"]
@@ -42,11 +42,20 @@ SCENARIO = Scenario(
     # follower's precision was being judged against the leader's thrust (docs/close_formation.md)
     leader_air_relative=True)
 
+# the levels of the committed records (train/policies/)
+_LEVELS = (1.0, 0.0, 0.5, 1.5)
+
 TASK = register_task(Task("close_formation", SCENARIO, "formation_env/CloseFormation", 1,
                           options={"action_mode": "setpoints", "compute_benefit": True,
                                    "reward": CLOSE_FORMATION_REWARD, "randomisation": CLOSE_FORMATION_RANDOMISATION},
                           guard="separation_guard", guard_options={"clip_ramp": 0.25},
-                          evaluation=EvaluationProtocol(levels=(0.0, 0.5, 1.0, 1.5), metric="harvest_ratio"),
+                          evaluation=EvaluationProtocol(
+                              levels=(0.0, 0.5, 1.0, 1.5), metric="harvest_ratio", absolute=True,
+                              # its first committed evaluation (sigma 1) judged the slot error
+                              ppo_record_score="rms_slot_error_m",
+                              records=(levels_record("close_formation_ppo_setpoints_levels.json", _LEVELS),
+                                       # SAC and recurrent PPO beside PPO on the same episodes
+                                       levels_record("close_formation_algorithms_levels.json", _LEVELS))),
                           baselines=("pid", "pid_formation", "station_keeper"),
                           reference=_optimum,
                           description="hold the ELL induced-drag optimum slot",

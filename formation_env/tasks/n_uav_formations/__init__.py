@@ -20,7 +20,7 @@ from __future__ import annotations
 
 from ...scenarios import Scenario, SlotSchedule
 from ...sim.config import Randomisation, RewardWeights
-from ..base import EvaluationProtocol, Task, register_task
+from ..base import EvaluationProtocol, Task, levels_record, register_task
 from . import optimum as _optimum
 
 __all__ = ["SCENARIOS", "TASKS", "FormationReference", "CLOSE_FORMATIONS_REWARD", "CLOSE_FORMATIONS_RANDOMISATION",
@@ -86,10 +86,24 @@ _DEFS = (
 )
 
 SCENARIOS = {name: _scenario(name, desc) for name, _, desc in _DEFS}
+
+
+#: each task's committed records (train/policies/); vee9's are the vee5 policies flown on it (transfer)
+_RECORDS = {
+    "echelon3": (levels_record("echelon3_ppo_setpoints_levels.json", (1.0,), "echelon3", 0),
+                 levels_record("echelon3_ppo_setpoints_levels.json", (0.0,), "echelon3", 1)),
+    "vee5": (levels_record("vee5_ppo_setpoints_levels.json", (1.0, 0.0), "vee5", 0),
+             levels_record("vee5_mappo_setpoints_levels.json", (1.0,), "vee5", 0),
+             levels_record("vee5_mappo_setpoints_levels.json", (0.0,), "vee5", 1),
+             # SAC and recurrent PPO beside PPO on the same episodes
+             levels_record("vee5_algorithms_levels.json", (1.0, 0.0, 1.5))),
+    "vee9": (levels_record("vee5_ppo_setpoints_levels.json", (1.0,), "vee9", 0),),
+}
 TASKS = {name: register_task(Task(name, SCENARIOS[name], gym_id, 1, baselines=("pid", "station_keeper"),
                                   options=dict(CLOSE_FORMATIONS_OPTIONS),
                                   guard="separation_guard" if name == "echelon3" else None,
-                                  evaluation=EvaluationProtocol(levels=(0.0, 1.0), metric="formation_saving"),
+                                  evaluation=EvaluationProtocol(levels=(0.0, 1.0), metric="formation_saving",
+                                                                records=_RECORDS[name], absolute=name != "vee9"),
                                   reference=FormationReference(name),
                                   description=f"N-UAV close formation ({name}) at the joint ELL optimum",
                                   # as close_formation: every follower starts a tenth of a span (std, per axis)

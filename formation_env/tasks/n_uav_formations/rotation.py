@@ -37,7 +37,7 @@ import numpy as np
 
 from ...scenarios import Scenario, SlotSchedule
 from ...sim.config import RewardWeights
-from ..base import EvaluationProtocol, Task, register_task
+from ..base import EvaluationProtocol, Task, levels_record, register_task
 from . import optimum as _optimum
 
 __all__ = ["PHASES_S", "rotation_keyframes", "leader_dropback_keyframes", "SCENARIO", "ROTATION_REWARD", "register"]
@@ -116,7 +116,9 @@ def register(base_options: dict) -> Task:
     The package calls it with its options (it owns them; this module does not import the package)."""
     return register_task(Task("vee_rotation", SCENARIO, "formation_env/VeeRotation", 1,
                               options={**base_options, "reward": ROTATION_REWARD},
-                              evaluation=EvaluationProtocol(levels=(0.0, 1.0), metric="reconfig_success"),
+                              evaluation=EvaluationProtocol(levels=(0.0, 1.0), metric="reconfig_success", records=(
+                                  levels_record("vee_rotation_ppo_setpoints_levels.json", (1.0,), "vee_rotation", 0),
+                                  levels_record("vee_rotation_ppo_setpoints_levels.json", (0.0,), "vee_rotation", 1))),
                               learning="all", baselines=("pid", "station_keeper"),
                               description="vee of 5 rotating the lead (leader to a trailing slot, the others up)",
                               test_randomisation={"initial_offset_m": 0.3}))

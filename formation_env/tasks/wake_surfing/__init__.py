@@ -30,7 +30,7 @@ import dataclasses
 
 from ...scenarios import Scenario, SlotSchedule, register_scenario
 from ...sim.config import Randomisation, RewardWeights
-from ..base import EvaluationProtocol, Task, register_task
+from ..base import EvaluationProtocol, RecordFile, Task, register_task
 
 __all__ = ["SCENARIO", "TASK", "WAKE_SURFING_REWARD", "WAKE_SURFING_RANDOMISATION", "BASELINES",
            "RANDOM_LEADER_SCENARIO", "RANDOM_LEADER_TASK", "RANDOM_LEADER_RANDOMISATION"]
@@ -95,7 +95,11 @@ TASK = register_task(Task(
     options={"action_mode": "setpoints", "compute_benefit": True, "reward": WAKE_SURFING_REWARD,
              "randomisation": WAKE_SURFING_TRAINING_RANDOMISATION},
     evaluation=EvaluationProtocol(levels=(0.0, 0.25, 1.0), headline_level=0.25, metric="harvest_ratio",
-                                  preset=_EVAL_PRESET),
+                                  preset=_EVAL_PRESET, absolute=True, ppo_record_score="saving_ratio", records=(
+                                      RecordFile("wake_surfing_ppo_setpoints_evaluation.json", ("controllers",),
+                                                 (0.25,)),
+                                      RecordFile("wake_surfing_ppo_setpoints_levels.json",
+                                                 ("levels", "wake_surfing_sigma_{sigma}", "episodes"), (0.0, 1.0)))),
     baselines=BASELINES, reference=_optimum, metrics=_metrics.METRICS, evaluator=_evaluation.EVALUATION,
     description="move within the safe box to the position of least induced drag"))
 
@@ -119,6 +123,13 @@ RANDOM_LEADER_TASK = register_task(Task(
     "wake_surfing_random_leader", RANDOM_LEADER_SCENARIO, "formation_env/WakeSurfingRandomLeader", 1,
     options={**TASK.options,
              "randomisation": dataclasses.replace(WAKE_SURFING_TRAINING_RANDOMISATION, **_LEADER_DRAWS)},
-    evaluation=dataclasses.replace(TASK.evaluation, preset={**_EVAL_PRESET, "randomisation": RANDOM_LEADER_RANDOMISATION}),
+    evaluation=dataclasses.replace(
+        TASK.evaluation, preset={**_EVAL_PRESET, "randomisation": RANDOM_LEADER_RANDOMISATION}, absolute=False,
+        ppo_record_score=None,
+        # the variant's own policies, then wake_surfing's flown on the variant's episodes (per level in this order)
+        records=tuple(RecordFile(f, ("levels", "wake_surfing_random_leader_sigma_{sigma}", "episodes"),
+                                 (0.25, 0.0, 1.0))
+                      for f in ("wake_surfing_random_leader_ppo_setpoints_levels.json",
+                                "wake_surfing_ppo_setpoints_levels.json"))),
     baselines=BASELINES, reference=_optimum, metrics=_metrics.METRICS, evaluator=_evaluation.EVALUATION,
     description="wake surfing behind a leader whose weight and speed are drawn per episode: find the wake"))
