@@ -32,6 +32,7 @@ from ..atmosphere.spectral_field_kernels import sample_modes_one
 from ..control.law import N_CSTATE, fcs_update
 from ..frames import quaternion_dcm_terms, track_to_ned_xy
 from ..wake.arrays import evaluate_formation
+from ..wake.biot_savart import sheet_on
 from ..wake.benefit import AIR_DENSITY_SL, induced_drag_saving_one
 from .guidance import formation_demands, gust_wind_ned, leader_wind, reference_path, schedule_features
 from ..wake.across import LANES, ChunkScratch, chunk_scratch, evaluate_chunk
@@ -297,7 +298,7 @@ def ell_chunk(p, s):
     lat = p.wake.lattice
     n = lat.panel_vehicle.shape[0]
     return EllChunk(
-        c=chunk_scratch(nv, lat.knot_x1_b.shape[0], lat.surface_origin_b.shape[0], n, p.wake.sheet is not None),
+        c=chunk_scratch(nv, lat.knot_x1_b.shape[0], lat.surface_origin_b.shape[0], n, sheet_on(p.wake.sheet)),
         act=np.zeros(LANES, np.int64), pos=np.zeros((LANES, nv, 3)), euler=np.zeros((LANES, nv, 3)),
         speed=np.ones((LANES, nv)), alpha=np.zeros((LANES, nv)), beta=np.zeros((LANES, nv)),
         gamma=np.empty((LANES, n)), vpts=np.empty((LANES, n, 3)), wind_ned=np.empty((LANES, nv, 3)),

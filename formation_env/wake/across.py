@@ -35,7 +35,7 @@ import numpy as np
 
 from .biot_savart import (_MIN_CORE_M, _TINY_H, CORE_LAMB_OSEEN, CORE_NONE, FOUR_PI, KURYLOWICH_C, LAMB_OSEEN_C,
                           SHEET_BLEND_OUTER, STRIP_OK, STRIP_W, branch_cored, leg_cored, leg_sheet_framed,
-                          strip_frames)
+                          sheet_on, strip_frames)
 from .kernels import effective_wind
 from .field import field_velocity
 from .posing import bound_length, branch_directions, place_lattice, to_ned
@@ -85,9 +85,9 @@ class ChunkScratch(NamedTuple):
 
 
 @_jit
-def chunk_scratch(n_vehicles, n_knots, n_surfaces, n_panels, sheet_on):
-    """A :class:`ChunkScratch` for a lattice of that size (``sheet_on``: room for the sheet law's strips)."""
-    n_strips = n_knots if sheet_on else 0
+def chunk_scratch(n_vehicles, n_knots, n_surfaces, n_panels, sheet_law):
+    """A :class:`ChunkScratch` for a lattice of that size (``sheet_law``: room for the sheet law's strips)."""
+    n_strips = n_knots if sheet_law else 0
     return ChunkScratch(
         s=np.zeros(n_knots * _STRIDE), p=np.zeros(_N_HEAD * LANES), rot=np.empty((LANES, n_vehicles, 3, 3)),
         vel=np.empty((LANES, n_vehicles, 3)), trail=np.empty((LANES, n_vehicles, 3)),
@@ -127,7 +127,7 @@ def _pose_chunk(lat, pos, euler, airspeed, alpha, beta, b0, nl, c, sheet):
                       lat.surface_origin_b, lat.surface_vehicle, c.rot[l], c.vel[l], c.trail[l], c.x1[l], c.x3[l],
                       c.origin[l])
         branch_directions(c.x1[l], c.x3[l], lat.knot_surface, lat.surface_knot_start, c.bound_dir[l], c.chord_dir[l])
-        if sheet is not None:
+        if sheet_on(sheet):
             strip_frames(c.trail[l], c.x3[l], kv, lat.knot_surface, c.frames[l])
         for k in range(kv.shape[0]):
             v = kv[k]
@@ -137,7 +137,7 @@ def _pose_chunk(lat, pos, euler, airspeed, alpha, beta, b0, nl, c, sheet):
             s[q + CDX], s[q + CDY], s[q + CDZ] = c.chord_dir[l, k, 0], c.chord_dir[l, k, 1], c.chord_dir[l, k, 2]
             s[q + BDX], s[q + BDY], s[q + BDZ] = c.bound_dir[l, k, 0], c.bound_dir[l, k, 1], c.bound_dir[l, k, 2]
             s[q + TX], s[q + TY], s[q + TZ] = c.trail[l, v, 0], c.trail[l, v, 1], c.trail[l, v, 2]
-            if sheet is not None:
+            if sheet_on(sheet):
                 s[q + SW] = c.frames[l, k, STRIP_W]
                 s[q + SOK] = c.frames[l, k, STRIP_OK]
             else:
@@ -164,7 +164,7 @@ def _control_point(lat, pos, b0, nl, j, c, sheet):
         pt[N1 + l] = r[0, 1] * nb_[0] + r[1, 1] * nb_[1] + r[2, 1] * nb_[2]
         pt[N2 + l] = r[0, 2] * nb_[0] + r[1, 2] * nb_[1] + r[2, 2] * nb_[2]
         w = 0.0
-        if sheet is not None:
+        if sheet_on(sheet):
             x1 = c.x1[l]
             w = np.sqrt((x1[k + 1, 0] - x1[k, 0]) ** 2 + (x1[k + 1, 1] - x1[k, 1]) ** 2 + (x1[k + 1, 2] - x1[k, 2]) ** 2)
         pt[RW + l] = w
@@ -225,7 +225,7 @@ def _core_radius(s, k0, k1, c, srf, src, lat, airspeed, b0, nl):
 
 
 @_jit
-def _other_llines(s, pt, k0, k1, cutoff, ro2, sheet_on):
+def _other_llines(s, pt, k0, k1, cutoff, ro2, sheet_law):
     """Another vehicle's knots k0..k1-1 seen from the control point, every lane: I1, LW, CW, LCX..LCZ in the fast
     form and LM 1.0 where that is not the law's (:func:`formation_env.wake.lanes.other_llines`'s operations)."""
     for k in range(np.uint64(k0), np.uint64(k1)):
@@ -286,7 +286,7 @@ def _other_llines(s, pt, k0, k1, cutoff, ro2, sheet_on):
             s[q + LCZ + l] = sz - lz
             outer = SHEET_BLEND_OUTER * max(s[q + SW + l], pt[RW + l])
             rp2 = max(a2 - ta * ta, 0.0)
-            in_sheet = sheet_on & (s[q + SOK + l] != 0.0) & (rp2 < outer * outer)
+            in_sheet = sheet_law & (s[q + SOK + l] != 0.0) & (rp2 < outer * outer)
             fast = (((xcore > 40.0) | (h2 < _TINY2)) & (1.26 * a2 > 40.0 * ro2)
                     & ((1.26 * rho2 > 40.0 * ro2) | (g2 < _TINY2)))
             s[q + LM + l] = 0.0 if (fast & ~in_sheet) else 1.0
@@ -308,7 +308,7 @@ def _fix_llines(s, k0, k1, c, cutoff, overlap_core, sheet):
             ax, ay, az = px - x3[k, 0], py - x3[k, 1], pz - x3[k, 2]
             na = math.sqrt(ax * ax + ay * ay + az * az)
             ia = 1.0 / na if na > 0.0 else 0.0
-            if sheet is not None:
+            if sheet_on(sheet):
                 lx, ly, lz = leg_sheet_framed(tx, ty, tz, ax, ay, az, ia, cutoff, s[q + RC + l], overlap_core,
                                               c.frames[l, k], pt[RW + l])
             else:
@@ -516,7 +516,7 @@ def evaluate_chunk(lat, sheet, pos, euler, airspeed, alpha, beta, b0, nl, c, gam
     nv = pos.shape[1]
     cutoff, overlap_core = lat.cutoff_m, lat.overlap_core_m
     ro2 = overlap_core * overlap_core if overlap_core > 0.0 else np.inf
-    sheet_on = sheet is not None
+    sheet_law = sheet_on(sheet)
     _pose_chunk(lat, pos, euler, airspeed, alpha, beta, b0, nl, c, sheet)
     # each vehicle's knots (contiguous, the lattice's order)
     vk0 = np.full(nv, n_knots)
@@ -534,8 +534,8 @@ def evaluate_chunk(lat, sheet, pos, euler, airspeed, alpha, beta, b0, nl, c, gam
             src = kv[ksk[srf]]
             if src != vj:
                 _core_radius(s, ksk[srf], ksk[srf + 1], c, srf, src, lat, airspeed, b0, nl)
-        _other_llines(s, pt, 0, a, cutoff, ro2, sheet_on)
-        _other_llines(s, pt, b, n_knots, cutoff, ro2, sheet_on)
+        _other_llines(s, pt, 0, a, cutoff, ro2, sheet_law)
+        _other_llines(s, pt, b, n_knots, cutoff, ro2, sheet_law)
         _fix_llines(s, 0, a, c, cutoff, overlap_core, sheet)
         _fix_llines(s, b, n_knots, c, cutoff, overlap_core, sheet)
         if a > 1:
@@ -578,7 +578,7 @@ def evaluate_chunk(lat, sheet, pos, euler, airspeed, alpha, beta, b0, nl, c, gam
                 v = pv[j]
                 to_ned(c.rot[l, v], pos[b, v], lat.eval_b[j], pt3)
                 recv_w = 0.0
-                if sheet is not None:
+                if sheet_on(sheet):
                     recv_w = bound_length(c.x1[l], lat.panel_left_knot[j])
                 wx_, wy_, wz_ = field_velocity(pt3[0], pt3[1], pt3[2], v, False, lat, posed, gamma_out[b], lat.core_mode,
                                                overlap_core, sheet, recv_w, c.frames[l])
@@ -607,7 +607,7 @@ def _make_batch(parallel: bool):
         n_blocks = min(n_chunks, _BLOCKS)
         for blk in nb.prange(n_blocks):
             c = chunk_scratch(pos.shape[1], lat.knot_x1_b.shape[0], lat.surface_origin_b.shape[0],
-                              lat.panel_vehicle.shape[0], sheet is not None)
+                              lat.panel_vehicle.shape[0], sheet_on(sheet))
             for ci in range(blk * n_chunks // n_blocks, (blk + 1) * n_chunks // n_blocks):
                 b0 = ci * LANES
                 evaluate_chunk(lat, sheet, pos, euler, airspeed, alpha, beta, b0, min(LANES, n - b0), c, gamma_out,

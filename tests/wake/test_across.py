@@ -90,7 +90,7 @@ def _kept(w, pos, euler, speed, alpha, beta):
     lat = w.lattice
     chunked = np.empty((nb_, n, n + 1))
     single = np.empty((nb_, n, n + 1))
-    c = chunk_scratch(nv, lat.knot_x1_b.shape[0], lat.surface_origin_b.shape[0], n, w.sheet is not None)
+    c = chunk_scratch(nv, lat.knot_x1_b.shape[0], lat.surface_origin_b.shape[0], n, bool(w.sheet))
     g, vp, o = np.empty((nb_, n)), np.empty((nb_, n, 3)), np.empty((nb_, nv, 3))
     for b0 in range(0, nb_, LANES):
         evaluate_chunk(lat, w.sheet, pos, euler, speed, alpha, beta, b0, min(LANES, nb_ - b0), c, g, vp, o, o.copy(),
