@@ -8,7 +8,7 @@ import numpy as np
 
 from formation_env.sim import EnvConfig, Simulation
 from formation_env.sim.dispatch import pack_structs
-from formation_env.sim.views import StructView, struct_view
+from formation_env.sim.views import StructView, struct_view, view_type
 
 
 class Inner(NamedTuple):
@@ -34,11 +34,6 @@ def _read_through_tuple(t, k):
     return t.values[k] * t.inner.scale + t.inner.table[k, 1] + t.count
 
 
-@nb.njit
-def _view_type_of(t):
-    return struct_view(t)
-
-
 def test_a_view_reads_and_writes_the_named_tuples_own_fields():
     rng = np.random.default_rng(0)
     t = Outer(values=rng.normal(size=5), count=3, inner=Inner(table=rng.normal(size=(5, 2)), scale=0.7))
@@ -51,18 +46,17 @@ def test_a_view_reads_and_writes_the_named_tuples_own_fields():
 def test_nested_named_tuples_are_views_too():
     t = Outer(values=np.zeros(2), count=1, inner=Inner(table=np.zeros((2, 2)), scale=1.0))
     typ = nb.typeof(t)
-    _view_type_of(t)  # compiles
-    (sig,) = _view_type_of.signatures
-    view = _view_type_of.overloads[sig].signature.return_type
+    view = view_type(typ)
     assert isinstance(view, StructView)
-    fields = dict(view.fields)
+    fields = view.field_dict
     assert isinstance(fields["inner"], StructView) and fields["values"] == typ.types[0]
+    assert fields["inner"].field_dict["scale"] == nb.float64
 
 
 def test_the_decision_kernels_receive_views_of_params_state_and_output():
     sim = Simulation(EnvConfig(scenario="formation_keeping"), batch_size=1)
     packed = nb.typeof(pack_structs(sim.params, sim.state, sim.output))
-    fields = dict(packed.fields)
+    fields = packed.field_dict
     assert set(fields) == {"p", "s", "o"}
     assert all(isinstance(fields[k], StructView) for k in fields)
-    assert isinstance(dict(fields["p"].fields)["wake"], StructView)
+    assert isinstance(fields["p"].field_dict["wake"], StructView)
