@@ -324,7 +324,8 @@ def step(state, controls, wind: WindInput | None = None, dt: float = 0.02,
 
     wind_arr = np.concatenate(
         [wnd.wind_ned, wnd.turbulence_body, wnd.ell_translational_ned, wnd.ell_rotational_body], axis=1)
-    return rk4_batch(np.ascontiguousarray(s), np.ascontiguousarray(u), wind_arr, dt, *_packed(params, options))
+    s = np.ascontiguousarray(s)
+    return rk4_batch(s, np.ascontiguousarray(u), wind_arr, dt, _packed(params, options), np.empty_like(s))
 
 
 def outputs(state, controls, wind: WindInput | None = None, params: AerosondeParams = AEROSONDE,

@@ -11,6 +11,7 @@ single runs bit for bit.
 from __future__ import annotations
 
 import math
+from typing import NamedTuple
 
 import numba as nb
 import numpy as np
@@ -35,8 +36,25 @@ _jit = nb.njit(cache=True, fastmath=False, error_model="numpy")
  K_G, K_GMODEL, K_LAT, K_ALPHADOT, K_REACTION, K_NPARAMS) = range(78)
 
 
-def pack(params: AerosondeParams, options) -> tuple:
-    """Packed scalars and tables for the kernels."""
+class AircraftTables(NamedTuple):
+    """The Aerosonde model packed for :func:`rk4_batch` (:func:`pack`): the scalars and the tables."""
+
+    scalars: np.ndarray  # (K_NPARAMS,) coefficients, geometry, mass data, options
+    prop_J: np.ndarray  # propeller advance ratio breaks
+    prop_CT: np.ndarray  # thrust coefficient at them
+    prop_CP: np.ndarray  # power coefficient at them
+    engine_rpm: np.ndarray  # engine map rows, rpm
+    engine_map: np.ndarray  # engine map columns, manifold pressure kPa
+    engine_power: np.ndarray  # shaft power, W
+    engine_fuel: np.ndarray  # fuel flow, g/h
+    atm_T: np.ndarray  # ISA table: temperature, K
+    atm_P: np.ndarray  # pressure, Pa
+    atm_rho: np.ndarray  # density, kg/m^3
+    atm_a: np.ndarray  # speed of sound, m/s
+
+
+def pack(params: AerosondeParams, options) -> AircraftTables:
+    """Packed scalars and tables for the kernels (an :class:`AircraftTables`)."""
     P = params
     v = np.zeros(K_NPARAMS)
     v[[K_MAC, K_SPAN, K_AREA]] = P.mac, P.span, P.area
@@ -64,7 +82,7 @@ def pack(params: AerosondeParams, options) -> tuple:
     v[K_ALPHADOT] = 1.0 if options.alpha_dot else 0.0
     v[K_REACTION] = 1.0 if options.engine_reaction_torque else 0.0
     tab = atmosphere_table()
-    return (v, np.ascontiguousarray(P.prop_J), np.ascontiguousarray(P.prop_CT), np.ascontiguousarray(P.prop_CP),
+    return AircraftTables(v, np.ascontiguousarray(P.prop_J), np.ascontiguousarray(P.prop_CT), np.ascontiguousarray(P.prop_CP),
             np.ascontiguousarray(P.engine_rpm), np.ascontiguousarray(P.engine_map_kpa),
             np.ascontiguousarray(P.engine_power_w), np.ascontiguousarray(P.engine_fuel_flow_g_per_h),
             np.ascontiguousarray(tab[:, 1]), np.ascontiguousarray(tab[:, 2]), np.ascontiguousarray(tab[:, 3]),
@@ -203,7 +221,11 @@ def aero_force_at(x, c, wind, v, tT, tP, tR, tA):
 
 
 @_jit
-def _deriv(x, c, nctrl, wind, alphadot, v, pJ, pCT, pCP, eR, eM, eP, eF, tT, tP, tR, tA, out):
+def _deriv(x, c, nctrl, wind, alphadot, ac, out):
+    """State derivative (15,) of one aircraft into ``out``; ``ac`` the packed model (:class:`AircraftTables`, or
+    any struct with its fields: one argument rather than twelve arrays, each of which a compiled call would
+    take and release a reference count of)."""
+    v = ac.scalars
     u, vv, w = x[0], x[1], x[2]
     p, q, r = x[3], x[4], x[5]
     fuel = _clip(x[13], 0.0, v[K_FUELCAP])
@@ -212,7 +234,7 @@ def _deriv(x, c, nctrl, wind, alphadot, v, pJ, pCT, pCP, eR, eM, eP, eF, tT, tP,
     (va_raw, alpha_raw, beta_raw, va, alpha, beta,
      r00, r01, r02, r10, r11, r12, r20, r21, r22) = air_data_kernel(x, wind, v)
     alt = -x[12]
-    temp, pres, rho, sound = _atmos(alt, tT, tP, tR, tA)
+    temp, pres, rho, sound = _atmos(alt, ac.atm_T, ac.atm_P, ac.atm_rho, ac.atm_a)
     if v[K_GMODEL] == 0.0:
         g = v[K_G]
     else:
@@ -231,8 +253,8 @@ def _deriv(x, c, nctrl, wind, alphadot, v, pJ, pCT, pCP, eR, eM, eP, eF, tT, tP,
     om = max(omega, 1.0) if math.isfinite(omega) else omega
     rad = v[K_RPROP]
     adv = math.pi * va / (om * rad)
-    ct = _interp1(pJ, pCT, adv)
-    cp = _interp1(pJ, pCP, adv)
+    ct = _interp1(ac.prop_J, ac.prop_CT, adv)
+    cp = _interp1(ac.prop_J, ac.prop_CP, adv)
     rho_om2 = rho * om * om
     thrust = (4.0 / math.pi ** 2) * rad ** 4 * rho_om2 * ct
     q_prop = -(4.0 / math.pi ** 3) * rad ** 5 * rho_om2 * cp
@@ -242,9 +264,9 @@ def _deriv(x, c, nctrl, wind, alphadot, v, pJ, pCT, pCP, eR, eM, eP, eF, tT, tP,
     if not map_kpa >= mapmin:  # np.maximum: NaN propagates
         map_kpa = mapmin if math.isfinite(map_kpa) else map_kpa
     rpm = om * (30.0 / math.pi)
-    power = _interp2(eR, eM, eP, rpm, map_kpa) * math.sqrt(v[K_TSL] / temp)
+    power = _interp2(ac.engine_rpm, ac.engine_map, ac.engine_power, rpm, map_kpa) * math.sqrt(v[K_TSL] / temp)
     q_eng = power / om
-    fuel_flow = _interp2(eR, eM, eF, rpm, map_kpa) / 3.6e6
+    fuel_flow = _interp2(ac.engine_rpm, ac.engine_map, ac.engine_fuel, rpm, map_kpa) / 3.6e6
     on = 1.0 if fuel > 0.0 else 0.0
     omega_dot = (on * q_eng + q_prop) / v[K_JSHAFT]
     if omega <= 0.0 and omega_dot < 0.0:
@@ -299,32 +321,31 @@ def _deriv(x, c, nctrl, wind, alphadot, v, pJ, pCT, pCP, eR, eM, eP, eF, tT, tP,
 
 
 @_jit
-def rk4_batch(state, controls, wind, dt, v, pJ, pCT, pCP, eR, eM, eP, eF, tT, tP, tR, tA):
-    """RK4 step of B aircraft. state (B, 16), controls (B, 4|5), wind (B, 12). Returns new state."""
+def rk4_batch(state, controls, wind, dt, ac, out):
+    """RK4 step of B aircraft: state (B, 16), controls (B, 4|5), wind (B, 12), ``ac`` the packed model
+    (:class:`AircraftTables` or a struct with its fields); the new state into ``out`` (B, 16), not ``state``
+    itself, which is returned."""
     n = state.shape[0]
     nctrl = controls.shape[1]
-    out = np.empty_like(state)
-    k1 = np.empty(15)
-    k2 = np.empty(15)
-    k3 = np.empty(15)
-    k4 = np.empty(15)
-    xs = np.empty(15)
+    v = ac.scalars
+    work = np.empty((5, 15))  # k1..k4 and the stage state
+    k1, k2, k3, k4, xs = work[0], work[1], work[2], work[3], work[4]
     for b in range(n):
         x = state[b]
         c = controls[b]
         wb = wind[b]
         alpha_now = air_data_kernel(x, wb, v)[1]
         alphadot = (alpha_now - x[15]) / dt if v[K_ALPHADOT] != 0.0 else 0.0
-        _deriv(x, c, nctrl, wb, alphadot, v, pJ, pCT, pCP, eR, eM, eP, eF, tT, tP, tR, tA, k1)
+        _deriv(x, c, nctrl, wb, alphadot, ac, k1)
         for i in range(15):
             xs[i] = x[i] + (0.5 * dt) * k1[i]
-        _deriv(xs, c, nctrl, wb, alphadot, v, pJ, pCT, pCP, eR, eM, eP, eF, tT, tP, tR, tA, k2)
+        _deriv(xs, c, nctrl, wb, alphadot, ac, k2)
         for i in range(15):
             xs[i] = x[i] + (0.5 * dt) * k2[i]
-        _deriv(xs, c, nctrl, wb, alphadot, v, pJ, pCT, pCP, eR, eM, eP, eF, tT, tP, tR, tA, k3)
+        _deriv(xs, c, nctrl, wb, alphadot, ac, k3)
         for i in range(15):
             xs[i] = x[i] + dt * k3[i]
-        _deriv(xs, c, nctrl, wb, alphadot, v, pJ, pCT, pCP, eR, eM, eP, eF, tT, tP, tR, tA, k4)
+        _deriv(xs, c, nctrl, wb, alphadot, ac, k4)
         for i in range(15):
             out[b, i] = x[i] + (dt / 6.0) * (k1[i] + 2.0 * (k2[i] + k3[i]) + k4[i])
         qn = math.sqrt(out[b, 6] ** 2 + out[b, 7] ** 2 + out[b, 8] ** 2 + out[b, 9] ** 2)

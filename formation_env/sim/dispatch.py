@@ -31,6 +31,7 @@ from numba.experimental import structref
 from numba.extending import overload
 
 from ..wake.across import LANES
+from .views import struct_view, view_type
 
 __all__ = ["PARALLEL_MIN_BATCH", "threads", "run_parallel", "ThreadTuner", "run_chunks", "StepStructs",
            "pack_structs", "EntryPoints"]
@@ -151,7 +152,7 @@ def run_chunks(kernel, n: int, args: tuple | list) -> None:
 @structref.register
 class StepStructsType(nbt.StructRef):
     """numba type of :class:`StepStructs`: one Simulation's (params, state, out) named tuples in one compiled
-    object, fields ``p``, ``s``, ``o``."""
+    object, fields ``p``, ``s``, ``o``, each a :class:`~formation_env.sim.views.StructView` of its named tuple."""
 
     def preprocess_fields(self, fields):
         return tuple((name, nbt.unliteral(typ)) for name, typ in fields)
@@ -174,13 +175,13 @@ def _pack(p, s, o):  # typed by the overload below; only called from compiled co
 
 @overload(_pack)
 def _pack_overload(p, s, o):
-    typ = StepStructsType([("p", p), ("s", s), ("o", o)])
+    typ = StepStructsType([("p", view_type(p)), ("s", view_type(s)), ("o", view_type(o))])
 
     def impl(p, s, o):
         r = structref.new(typ)
-        r.p = p
-        r.s = s
-        r.o = o
+        r.p = struct_view(p)
+        r.s = struct_view(s)
+        r.o = struct_view(o)
         return r
 
     return impl
@@ -188,7 +189,7 @@ def _pack_overload(p, s, o):
 
 @nb.njit(cache=True)
 def pack_structs(p, s, o):
-    """:class:`StepStructs` holding ``p``, ``s``, ``o`` (their arrays shared, not copied)."""
+    """:class:`StepStructs` holding views of ``p``, ``s``, ``o`` (their arrays shared, not copied)."""
     return _pack(p, s, o)
 
 

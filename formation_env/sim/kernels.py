@@ -71,15 +71,15 @@ def envelope_status(x, wind12, v, lim):
 @_jit
 def ell_inputs(state, ambient, wing_origin_b, pos, euler, speed, alpha, beta):
     """Pose of each aircraft's wing origin and its air data relative to the ambient wind."""
+    r = np.empty((3, 3))  # body -> NED
+    vb = np.empty(3)
     for a in range(state.shape[0]):
         x = state[a]
         e0, ex, ey, ez = x[6], x[7], x[8], x[9]
-        r = np.empty((3, 3))  # body -> NED
         (r[0, 0], r[0, 1], r[0, 2], r[1, 0], r[1, 1], r[1, 2],
          r[2, 0], r[2, 1], r[2, 2]) = quaternion_dcm_terms(e0, ex, ey, ez)
         for i in range(3):
             pos[a, i] = x[POS_N + i] + r[i, 0] * wing_origin_b[0] + r[i, 1] * wing_origin_b[1] + r[i, 2] * wing_origin_b[2]
-        vb = np.empty(3)
         for i in range(3):  # air-relative velocity in body axes: u_b - R^T w_ned
             vb[i] = x[i] - (r[0, i] * ambient[a, 0] + r[1, i] * ambient[a, 1] + r[2, i] * ambient[a, 2])
         sp = math.sqrt(vb[0] * vb[0] + vb[1] * vb[1] + vb[2] * vb[2])
@@ -160,12 +160,9 @@ def integrate_one(state, controls, ambient, turb, turb_omega, held_wind, held_om
             wind[a, 3 + i] = turb[a, i]
             wind[a, 6 + i] = held_wind[a, i]
             wind[a, 9 + i] = held_omega[a, i] + turb_omega[a, i]
-    new = rk4_batch(state, controls, wind, dt, ac.scalars, ac.prop_J, ac.prop_CT, ac.prop_CP, ac.engine_rpm,
-                    ac.engine_map, ac.engine_power, ac.engine_fuel, ac.atm_T, ac.atm_P, ac.atm_rho, ac.atm_a)
+    rk4_batch(state, controls, wind, dt, ac, out_state)
     for a in range(nv):
-        for i in range(state.shape[1]):
-            out_state[a, i] = new[a, i]
-        out_status[a] = envelope_status(new[a], wind[a], ac.scalars, ac.limits)
+        out_status[a] = envelope_status(out_state[a], wind[a], ac.scalars, ac.limits)
 
 
 @_jit_inline

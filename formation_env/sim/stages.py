@@ -10,10 +10,10 @@ Per physics substep: :func:`demands` (guidance) -> :func:`ambient_wind` -> :func
 
 Every stage works on formation ``b`` of the state ``s`` (:class:`~formation_env.sim.state.SimState`)
 with the parameters ``p`` (:class:`~formation_env.sim.params.StepParams`), or only the part of them it
-needs (a compiled call increfs every array of its struct arguments: passing all of ``p`` to every
-stage made the decision 10-20 % slower); what one decision needs
-as scratch is one :class:`DecisionScratch`, allocated once per decision (allocating inside the
-substep loop costs ~10 % of a step). Shapes: V vehicles; units SI; frames NED earth, body x
+needs; what one decision needs as scratch is one :class:`DecisionScratch`, allocated once per decision
+(allocating inside the substep loop costs ~10 % of a step). In the decision, ``p``, ``s``, the output and
+the scratch are :class:`~formation_env.sim.views.StructView` s of those named tuples (fields read the same):
+a stage binding a named tuple of arrays takes and releases a reference count per array, a view one. Shapes: V vehicles; units SI; frames NED earth, body x
 forward / y starboard / z down, track frame (x along the track, y starboard, z down).
 """
 
@@ -41,6 +41,7 @@ from .kernels import (WAKE_CLEAR, WAKE_SOLVE, clear_if_not_finite, clear_wake, e
                       min_separation_each, position_finite, separation_each_known, step_separation, wake_action)
 from .observe import box_depth_each, observe_formation, reward_formation, slot_error
 from .params import RESIDUAL, SETPOINTS, SURFACES, TURBULENCE_LANES, TURBULENCE_OFF, TURBULENCE_SPECTRAL
+from .views import struct_view
 
 __all__ = ["FieldScratch", "DecisionScratch", "field_scratch", "decision_scratch", "ground_velocity_ned", "demands",
            "sample_turbulence", "ambient_wind", "setpoint_shift", "control", "EllChunk", "ell_chunk",
@@ -50,16 +51,14 @@ __all__ = ["FieldScratch", "DecisionScratch", "field_scratch", "decision_scratch
            "formation_benefit", "formation_saving", "reward_output", "observe_one"]
 
 _jit = nb.njit(cache=True, error_model="numpy")
-# The stages called at every physics step are inlined into the decision at numba IR level: as separate
-# compiled calls each one increfs and decrefs every array of the StepParams / SimState it is passed
-# (~100), a cost comparable to a small formation's physics step (issue 21). So are the stages called once a
-# decision that only call further kernels (formation_saving, formation_benefit, observe_one): each compiled function links
-# and re-optimises everything it calls (numba), so a function of its own above the ELL solve is that solve
-# compiled once more.
+# The stages called at every physics step are inlined into the decision at numba IR level, and so are the
+# stages called once a decision that only call further kernels (formation_saving, formation_benefit,
+# observe_one): each compiled function links and re-optimises everything it calls (numba), so a function of its
+# own above the ELL solve is that solve compiled once more.
 _jit_inline = nb.njit(cache=True, error_model="numpy", inline="always")
 QUAT0 = QUAT.start  # the attitude quaternion's first column (numba slices by integer constants)
-# A compiled call increfs and decrefs every array of its struct arguments (StepParams holds ~70,
-# SimState ~25): a stage not inlined takes the smallest part of the parameters it needs.
+# A compiled call given a named tuple increfs and decrefs every array in it (StepParams holds ~70, SimState
+# ~40): a stage called with the named tuples themselves (outside the decision) takes the smallest part it needs.
 
 
 class FieldScratch(NamedTuple):
@@ -129,7 +128,7 @@ def decision_scratch(s, b, benefit_on=False):
         last_pos=np.empty((nv, 3)), known=np.zeros(nv, dtype=np.bool_),
         aic_keep=np.empty((n_keep, n_keep + 1)), no_keep=np.empty((0, 0)), field=field_scratch(nv))
     record_finite_positions(s, b, sc)
-    return sc
+    return struct_view(sc)
 
 
 @_jit
@@ -293,17 +292,18 @@ class EllChunk(NamedTuple):
 
 @_jit
 def ell_chunk(p, s):
-    """An :class:`EllChunk` for the formations of ``s`` and the wake of ``p``."""
+    """A view (:func:`formation_env.sim.views.struct_view`) of an :class:`EllChunk` for the formations of ``s`` and
+    the wake of ``p``."""
     nv = s.aircraft.shape[1]
     lat = p.wake.lattice
     n = lat.panel_vehicle.shape[0]
-    return EllChunk(
+    return struct_view(EllChunk(
         c=chunk_scratch(nv, lat.knot_x1_b.shape[0], lat.surface_origin_b.shape[0], n, sheet_on(p.wake.sheet)),
         act=np.zeros(LANES, np.int64), pos=np.zeros((LANES, nv, 3)), euler=np.zeros((LANES, nv, 3)),
         speed=np.ones((LANES, nv)), alpha=np.zeros((LANES, nv)), beta=np.zeros((LANES, nv)),
         gamma=np.empty((LANES, n)), vpts=np.empty((LANES, n, 3)), wind_ned=np.empty((LANES, nv, 3)),
         wind_b=np.empty((LANES, nv, 3)), omega_b=np.empty((LANES, nv, 3)), omega_ned=np.empty((LANES, nv, 3)),
-        keep=np.empty((LANES if p.benefit_on else 0, n, n + 1)), no_keep=np.empty((0, n, n + 1)))
+        keep=np.empty((LANES if p.benefit_on else 0, n, n + 1)), no_keep=np.empty((0, n, n + 1))))
 
 
 @_jit_inline

@@ -47,6 +47,7 @@ from .stages import (advance_turbulence, ambient_wind, control, crash_and_slot_e
                      reward_output, sample_turbulence, slot_frame_angle, solve_chunk, step_separation_check)
 from .stages import setpoint_shift as _setpoint_shift  # noqa: F401  (tests/envs reads it here)
 from .state import SimState, StepOutput
+from .views import struct_view
 
 __all__ = ["step", "refresh", "observe", "PARALLEL_MIN_BATCH", "decide_chunk", "refresh_formation", "formation_benefit",
            "observe_one", "ENTRY_POINTS"]
@@ -65,7 +66,7 @@ def refresh_formation(p, s, b):
     nv = s.aircraft.shape[1]
     demands(p.scenario, s, b, s.step[b] * p.dt_s, np.empty((nv, 3)))
     if p.turbulence != TURBULENCE_OFF:
-        sample_turbulence(p.turbulence, p.field, s, b, field_scratch(nv), s.step[b] * p.dt_s)
+        sample_turbulence(p.turbulence, p.field, s, b, struct_view(field_scratch(nv)), s.step[b] * p.dt_s)
 
 
 @_jit_inline

@@ -161,8 +161,8 @@ def warm_up(simulation, stream=sys.stderr, processes: int | None = None) -> floa
     the stamp :func:`is_warm` reads. ``simulation``: the :class:`~formation_env.sim.Simulation` class the decision
     step's stages fly. ``processes``: 2 compiles :data:`SECOND_PROCESS_STAGES` in a second process at the same
     time as the other stages (then, after the others, waits for it and loads them from the cache here, which also
-    compiles whatever that process did not finish); 1 compiles everything here, one stage after the other; None: 2 when the machine has two cores or
-    more. Returns the seconds it took."""
+    compiles whatever that process did not finish); 1 compiles everything here, one stage after the other; None: 2
+    when the machine has two cores or more. Returns the seconds it took."""
     global _BUSY
     if processes is None:
         processes = 2 if (os.cpu_count() or 1) >= 2 else 1

@@ -7,8 +7,8 @@ import numpy as np
 
 import numba as nb
 
-from .biot_savart import SHEET_OFF
-from .kernels import CORE_NONE, SHEET_ON, evaluate_one
+from .biot_savart import SHEET_OFF, SHEET_ON
+from .kernels import CORE_NONE, evaluate_one
 from .residual import NO_TABLE
 from .structs import LatticeArrays, WakeArrays
 

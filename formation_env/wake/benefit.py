@@ -368,7 +368,7 @@ def induced_drags_one(wake, wake_alone, pos, euler, speed, alpha, beta, gamma_fo
         ox, oy, oz, ax, ay, az = _own_field_pair(mx, my, mz, v, lat, posed, gamma_formation, gamma_alone)
         ex, ey, ez = field_velocity(mx, my, mz, v, False, lat, posed, gamma_formation, lat.core_mode,
                                     lat.overlap_core_m, wake.sheet,
-                                    0.0 if not sheet_on(wake.sheet) else np.sqrt(lx * lx + ly * ly + lz * lz), frames)
+                                    np.sqrt(lx * lx + ly * ly + lz * lz) if sheet_on(wake.sheet) else 0.0, frames)
         _add_kutta_joukowski(f, v, air_density * gamma_formation[j], vel[v, 0], vel[v, 1], vel[v, 2], ox, oy, oz,
                              ex, ey, ez, lx, ly, lz)
         # alone: no other vehicle (the separate solve adds the empty others' field, 0.0, as here)

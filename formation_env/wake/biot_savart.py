@@ -41,9 +41,8 @@ OVERLAP_CORE_CHORD_FRACTION = 1.0
 SHEET_BLEND_INNER = 4.0
 SHEET_BLEND_OUTER = 6.0
 # The kernels' switch for the sheet law, a float: SHEET_ON, or SHEET_OFF for the thesis's legs. A value rather than
-# a type, so that one compiled kernel serves both: the vectorised lane loops take it as a mask, the scalar laws as a
-# branch, and neither slows the thesis's path. None is the thesis's too (:func:`sheet_on`), for callers of the
-# kernels that pass no switch.
+# a type, so that one compiled kernel serves both (the vectorised lane loops take it as a mask, the scalar laws as a
+# branch). None is the thesis's too (:func:`sheet_on`), for callers of the kernels that pass no switch.
 SHEET_ON = 1.0
 SHEET_OFF = 0.0
 # max over x of (1 - exp(-1.26 x^2)) / x (at x ~ 1.0): the peak of the cored law is

@@ -28,7 +28,8 @@ import numpy as np
 from .aic import assemble_and_solve, lu_solve_inplace, static_aic
 from .biot_savart import (_MIN_CORE_M, _TINY_H, CORE_KURYLOWICH, CORE_LAMB_OSEEN, CORE_NONE, CORE_PEAK,  # noqa: F401
                           FOUR_PI, KURYLOWICH_C, LAMB_OSEEN_C, OVERLAP_CORE_CHORD_FRACTION, branch, branch_cored,
-                          core_radius, sheet_on, sheet_strip_frames, leg, leg_velocity, point_to_knots, segment_velocity, SHEET_ON)
+                          core_radius, sheet_on, sheet_strip_frames, leg, leg_velocity, point_to_knots,
+                          segment_velocity, SHEET_ON)
 from .field import field_velocity, field_velocity_batch
 from .posing import bound_length, branch_directions, dcm_ned_to_body_1, place_lattice, posed_lattice, to_ned
 from .structs import LatticeArrays
@@ -54,8 +55,8 @@ def evaluate_one(lat, pos, euler, airspeed, alpha, beta, gamma_out, vpts_out, wi
     :func:`~formation_env.wake.posing.posed_lattice`'s; the outputs: circulation (N,), induced velocity at the
     evaluation points (N, 3) NED, and per vehicle (V, 3) the wind NED and body and the rotational wind body and NED.
     ``sheet`` (:data:`SHEET_ON`; :data:`~formation_env.wake.biot_savart.SHEET_OFF` or None: the thesis): the other
-    vehicles' trailing legs take the sheet law near their wake plane in the solve and the field (``WakeModel.sheet``). ``keep``: see
-    :func:`formation_env.wake.aic.assemble_and_solve`."""
+    vehicles' trailing legs take the sheet law near their wake plane in the solve and the field
+    (``WakeModel.sheet``). ``keep``: see :func:`formation_env.wake.aic.assemble_and_solve`."""
     panel_left_knot, panel_vehicle, control_b, eval_b = lat.panel_left_knot, lat.panel_vehicle, lat.control_b, lat.eval_b
     core_mode, aic_core_mode, overlap_core = lat.core_mode, lat.aic_core_mode, lat.overlap_core_m
     n_panels = panel_left_knot.shape[0]

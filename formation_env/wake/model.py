@@ -19,7 +19,7 @@ import numpy as np
 from ..geometry import Vehicle
 from . import kernels
 from .arrays import lattice_arrays
-from .biot_savart import SHEET_OFF
+from .biot_savart import SHEET_OFF, SHEET_ON
 from .lattice import EVAL_POINTS, ROTATIONAL_METHODS, build_template, gradient_weights
 from .state import FormationState
 
@@ -208,7 +208,7 @@ class WakeModel:
         out = [np.empty((b, v, 3)) for _ in range(4)]
         kernel = kernels.evaluate_batch_parallel if b >= _PARALLEL_MIN_BATCH else kernels.evaluate_batch_serial
         kernel(self._lattice, state.position_ned, state.euler_rad, state.airspeed_mps, state.alpha_rad, state.beta_rad,
-               gamma, vpts, *out, kernels.SHEET_ON if self.sheet else SHEET_OFF)
+               gamma, vpts, *out, SHEET_ON if self.sheet else SHEET_OFF)
         return WakeSolution(gamma, vpts, *out)
 
     def induced_velocity(
@@ -265,7 +265,7 @@ class WakeModel:
             np.ascontiguousarray(pts), np.ascontiguousarray(vf), only_vehicle is not None, self._lattice,
             state.position_ned, state.euler_rad, state.airspeed_mps, state.alpha_rad, state.beta_rad,
             np.ascontiguousarray(solution.circulation), core_mode, self.overlap_core_m if others else 0.0, out,
-            kernels.SHEET_ON if (self.sheet and others) else None, rw,
+            SHEET_ON if (self.sheet and others) else SHEET_OFF, rw,
         )
         return out
 

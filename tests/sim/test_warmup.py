@@ -1,5 +1,5 @@
-"""formation_env.sim.warmup: every stage runs, the wake's and the energy account's in a second process when asked (on a
-warm cache here, so each stage loads its kernels; the compile itself is the suite's own first step after make
+"""formation_env.sim.warmup: every stage runs, the wake's, the PID's and the energy account's in a second process when
+asked (on a warm cache here, so each stage loads its kernels; the compile itself is the suite's own first step after make
 install); every task flies one compiled decision step."""
 
 import io
