@@ -101,7 +101,9 @@ def baseline_commit(path: str | None) -> str | None:
                              timeout=30)
     except (OSError, subprocess.SubprocessError):
         return None
-    return out.stdout.strip() or None if out.returncode == 0 else None
+    if out.returncode != 0:
+        return None
+    return out.stdout.strip() or None
 
 
 def run_benchmarks(quick: bool = False, baseline: str | None = None, busy: bool = True, log=None) -> dict:
