@@ -82,11 +82,11 @@ def pack(params: AerosondeParams, options) -> AircraftTables:
     v[K_ALPHADOT] = 1.0 if options.alpha_dot else 0.0
     v[K_REACTION] = 1.0 if options.engine_reaction_torque else 0.0
     tab = atmosphere_table()
-    return AircraftTables(v, np.ascontiguousarray(P.prop_J), np.ascontiguousarray(P.prop_CT), np.ascontiguousarray(P.prop_CP),
-            np.ascontiguousarray(P.engine_rpm), np.ascontiguousarray(P.engine_map_kpa),
-            np.ascontiguousarray(P.engine_power_w), np.ascontiguousarray(P.engine_fuel_flow_g_per_h),
-            np.ascontiguousarray(tab[:, 1]), np.ascontiguousarray(tab[:, 2]), np.ascontiguousarray(tab[:, 3]),
-            np.ascontiguousarray(tab[:, 4]))
+    c = np.ascontiguousarray
+    return AircraftTables(scalars=v, prop_J=c(P.prop_J), prop_CT=c(P.prop_CT), prop_CP=c(P.prop_CP),
+                          engine_rpm=c(P.engine_rpm), engine_map=c(P.engine_map_kpa), engine_power=c(P.engine_power_w),
+                          engine_fuel=c(P.engine_fuel_flow_g_per_h), atm_T=c(tab[:, 1]), atm_P=c(tab[:, 2]),
+                          atm_rho=c(tab[:, 3]), atm_a=c(tab[:, 4]))
 
 
 @_jit
@@ -323,8 +323,8 @@ def _deriv(x, c, nctrl, wind, alphadot, ac, out):
 @_jit
 def rk4_batch(state, controls, wind, dt, ac, out):
     """RK4 step of B aircraft: state (B, 16), controls (B, 4|5), wind (B, 12), ``ac`` the packed model
-    (:class:`AircraftTables` or a struct with its fields); the new state into ``out`` (B, 16), not ``state``
-    itself, which is returned."""
+    (:class:`AircraftTables` or a struct with its fields); the new state into ``out`` (B, 16; another array than
+    ``state``), which is returned."""
     n = state.shape[0]
     nctrl = controls.shape[1]
     v = ac.scalars

@@ -92,6 +92,20 @@ def _key(case: dict) -> str:
         " benefit" if case.get("benefit") else "") + (f" turbulence={case['turbulence']}" if case.get("turbulence") else "")
 
 
+def baseline_commit(path: str | None) -> str | None:
+    """The git commit (short hash) checked out at ``path``, or None where it is not a git work tree."""
+    if path is None:
+        return None
+    try:
+        out = subprocess.run(["git", "-C", path, "rev-parse", "--short", "HEAD"], capture_output=True, text=True,
+                             timeout=30)
+    except (OSError, subprocess.SubprocessError):
+        return None
+    if out.returncode != 0:
+        return None
+    return out.stdout.strip() or None
+
+
 def run_benchmarks(quick: bool = False, baseline: str | None = None, busy: bool = True, log=None) -> dict:
     """Every configuration: {case: {"new": ..., "old": ..., "ratio": new/old}} for (threads, busy).
     ``log(line)``, when given, gets one progress line per measured case ("envs k/N: <config> <case>")."""
@@ -113,7 +127,8 @@ def run_benchmarks(quick: bool = False, baseline: str | None = None, busy: bool 
         {"kind": "machine"}]
     configs = [(2, False), (1, False)] + ([(2, True), (1, True)] if busy else [])
     out: dict = {"case": "formation_keeping, 2 Aerosondes, ELL wake every 50 Hz physics step, 10 Hz decisions",
-                 "baseline": baseline, "peers_reported": PEERS, "configurations": {}}
+                 "baseline": baseline, "baseline_commit": baseline_commit(baseline), "peers_reported": PEERS,
+                 "configurations": {}}
     total = len(configs) * len(cases) * (2 if baseline else 1)
     done = [0]
 

@@ -217,11 +217,7 @@ def surface_scale(limit_rad: float) -> np.ndarray:
 
 def aircraft_arrays(params=AEROSONDE, options=DEFAULT_OPTIONS, limits=DEFAULT_LIMITS) -> AircraftArrays:
     """The Aerosonde ``params`` with ``options`` packed for the kernels, and its flight envelope."""
-    (scalars, prop_j, prop_ct, prop_cp, engine_rpm, engine_map, engine_power, engine_fuel,
-     atm_t, atm_p, atm_rho, atm_a) = pack_aircraft(params, options)
-    return AircraftArrays(scalars=scalars, prop_J=prop_j, prop_CT=prop_ct, prop_CP=prop_cp, engine_rpm=engine_rpm,
-                          engine_map=engine_map, engine_power=engine_power, engine_fuel=engine_fuel, atm_T=atm_t,
-                          atm_P=atm_p, atm_rho=atm_rho, atm_a=atm_a, limits=pack_limits(limits))
+    return AircraftArrays(**pack_aircraft(params, options)._asdict(), limits=pack_limits(limits))
 
 
 def scenario_arrays(sc, manoeuvres: bool, leader_air_relative: bool | None = None) -> ScenarioArrays:

@@ -13,8 +13,9 @@ with the parameters ``p`` (:class:`~formation_env.sim.params.StepParams`), or on
 needs; what one decision needs as scratch is one :class:`DecisionScratch`, allocated once per decision
 (allocating inside the substep loop costs ~10 % of a step). In the decision, ``p``, ``s``, the output and
 the scratch are :class:`~formation_env.sim.views.StructView` s of those named tuples (fields read the same):
-a stage binding a named tuple of arrays takes and releases a reference count per array, a view one. Shapes: V vehicles; units SI; frames NED earth, body x
-forward / y starboard / z down, track frame (x along the track, y starboard, z down).
+a stage binding a named tuple of arrays takes and releases a reference count per array, a view one. Shapes: V
+vehicles; units SI; frames NED earth, body x forward / y starboard / z down, track frame (x along the track, y
+starboard, z down).
 """
 
 from __future__ import annotations

@@ -4,8 +4,8 @@ A numba named tuple of arrays is a value: binding it to a variable (a stage's pa
 increments the reference count of every array in it, and the matching decrements come where the variable dies.
 numba's reference-count pruning removes such pairs only where nothing else is released in between, which a stage
 with a loop, a temporary array or a call never satisfies; so each stage taking ``p`` (``StepParams``, ~70 arrays),
-``s`` (``SimState``, ~40) and the decision's scratch (~35) cost some 300 atomic operations per physics step, about a
-fifth of a formation's physics step. A :class:`StructView` holds the same fields in a numba structref: binding it
+``s`` (``SimState``, ~40) and the decision's scratch (~35) took and released a count of each of them, every physics
+step. A :class:`StructView` holds the same fields in a numba structref: binding it
 costs one count, and ``view.field`` reads the field itself (an array's count taken and released in the same
 statement, which the pruning removes). Stages read fields exactly as on the named tuple, so they compile for
 either; the numbers are the same.

@@ -1,5 +1,7 @@
 """The environment benchmark's cases and table (speed is reported by `formation-env bench`, never asserted)."""
 
+from pathlib import Path
+
 import numpy as np
 
 from formation_env.envs import bench
@@ -155,3 +157,21 @@ def test_peers_not_installed_are_reported_not_raised():
             importable = __import__("importlib").util.find_spec("vmas" if "VMAS" in r["peer"] else "PyFlyt")
             assert ("unsupported" in r) == (importable is None)
     assert "not installed" in bench.format_peers(out)
+
+
+def test_a_baseline_is_named_by_its_commit_on_the_performance_page(tmp_path):
+    import subprocess
+
+    from formation_env.envs.bench import baseline_commit
+    from train.publish.results_page import performance_markdown
+
+    root = Path(__file__).resolve().parents[2]
+    head = subprocess.run(["git", "-C", str(root), "rev-parse", "--short", "HEAD"], capture_output=True, text=True)
+    assert baseline_commit(str(root)) == (head.stdout.strip() if head.returncode == 0 else None)
+    assert baseline_commit(str(tmp_path)) is None and baseline_commit(None) is None
+    bench = {"machine": {"cpus": 2, "python": "3.11", "platform": "x"},
+             "envs": {"case": "c", "baseline": "/somewhere", "baseline_commit": "abc1234", "configurations": {
+                 "threads=2": {"single setpoints learning=all": {"new": 100.0, "old": 50.0, "ratio": 2.0}}}}}
+    assert "code of commit abc1234 (`--baseline`)" in performance_markdown(bench)
+    bench["envs"]["baseline"] = None
+    assert "--baseline`)," not in performance_markdown(bench)
