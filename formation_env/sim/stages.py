@@ -36,7 +36,7 @@ from ..wake.arrays import evaluate_formation
 from ..wake.biot_savart import sheet_on
 from ..wake.benefit import AIR_DENSITY_SL, induced_drag_saving_one
 from .guidance import formation_demands, gust_wind_ned, leader_wind, reference_path, schedule_features
-from ..wake.across import LANES, ChunkScratch, chunk_scratch, evaluate_chunk
+from ..wake.across import LANES, ChunkScratch, chunk_scratch, field_chunk, solve_chunk_lanes
 from ..wake.coupling import couple_solved
 from .kernels import (WAKE_CLEAR, WAKE_SOLVE, clear_if_not_finite, clear_wake, ell_inputs, integrate_one,
                       min_separation_each, position_finite, separation_each_known, step_separation, wake_action)
@@ -289,22 +289,26 @@ class EllChunk(NamedTuple):
     omega_ned: np.ndarray  # (LANES, V, 3) rad/s NED
     keep: np.ndarray  # (LANES, N, N + 1) the AIC and right-hand side before elimination (benefit on), else (0, N, N + 1)
     no_keep: np.ndarray  # (0, N, N + 1): the substeps whose AIC nothing reads
+    no_keep_one: np.ndarray  # (0, N + 1): the same for one lane
 
 
 @_jit
-def ell_chunk(p, s):
+def ell_chunk(p, s, chunked):
     """A view (:func:`formation_env.sim.views.struct_view`) of an :class:`EllChunk` for the formations of ``s`` and
-    the wake of ``p``."""
+    the wake of ``p``; ``chunked``: with a chunk scratch for the joint solve (else an empty one: the lanes are
+    solved one by one)."""
     nv = s.aircraft.shape[1]
     lat = p.wake.lattice
     n = lat.panel_vehicle.shape[0]
+    lanes = LANES if chunked else 0
+    n_kept = LANES if p.benefit_on else 0
     return struct_view(EllChunk(
-        c=chunk_scratch(nv, lat.knot_x1_b.shape[0], lat.surface_origin_b.shape[0], n, sheet_on(p.wake.sheet)),
+        c=chunk_scratch(nv, lat.knot_x1_b.shape[0], lat.surface_origin_b.shape[0], n, sheet_on(p.wake.sheet), lanes),
         act=np.zeros(LANES, np.int64), pos=np.zeros((LANES, nv, 3)), euler=np.zeros((LANES, nv, 3)),
         speed=np.ones((LANES, nv)), alpha=np.zeros((LANES, nv)), beta=np.zeros((LANES, nv)),
         gamma=np.empty((LANES, n)), vpts=np.empty((LANES, n, 3)), wind_ned=np.empty((LANES, nv, 3)),
         wind_b=np.empty((LANES, nv, 3)), omega_b=np.empty((LANES, nv, 3)), omega_ned=np.empty((LANES, nv, 3)),
-        keep=np.empty((LANES if p.benefit_on else 0, n, n + 1)), no_keep=np.empty((0, n, n + 1))))
+        keep=np.empty((n_kept, n, n + 1)), no_keep=np.empty((0, n, n + 1)), no_keep_one=np.empty((0, n + 1))))
 
 
 @_jit_inline
@@ -329,17 +333,30 @@ def physics_before_wake(p, s, b, last_substep, sc, ell, l):
     return act == WAKE_SOLVE
 
 
-@_jit
-def solve_chunk(p, ell, nl, last_substep):
-    """The ELL of the chunk's lanes 0..nl-1 that solve (``ell.act``), all lanes at once: a lane that does not solve
-    flies the inputs of the first that does (computed, never read); nothing when none solves. On the
-    ``last_substep`` with the benefit on, each lane's AIC and right-hand side are kept in ``ell.keep``."""
+@_jit_inline
+def solve_chunk(p, ell, nl, last_substep, chunked):
+    """The ELL of the chunk's lanes 0..nl-1 that solve (``ell.act``): ``chunked``, all LANES lanes at once
+    (:mod:`formation_env.wake.across`; a lane that does not solve flies the inputs of the first that does, computed,
+    never read), else lane by lane (:func:`formation_env.wake.arrays.evaluate_formation`); nothing when none
+    solves. On the ``last_substep`` with the benefit on, each lane's AIC and right-hand side are kept in
+    ``ell.keep``."""
     first = -1
     for l in range(nl):
         if ell.act[l] == WAKE_SOLVE:
             first = l
             break
     if first < 0:
+        return
+    keep = ell.keep if last_substep else ell.no_keep
+    if not chunked:
+        for l in range(nl):
+            if ell.act[l] == WAKE_SOLVE:
+                kept = ell.no_keep_one
+                if keep.shape[0] > 0:
+                    kept = keep[l]
+                evaluate_formation(p.wake, ell.pos[l], ell.euler[l], ell.speed[l], ell.alpha[l], ell.beta[l],
+                                   ell.gamma[l], ell.vpts[l], ell.wind_ned[l], ell.wind_b[l], ell.omega_b[l],
+                                   ell.omega_ned[l], kept)
         return
     for l in range(LANES):
         if l >= nl or ell.act[l] != WAKE_SOLVE:
@@ -348,9 +365,10 @@ def solve_chunk(p, ell, nl, last_substep):
             ell.speed[l] = ell.speed[first]
             ell.alpha[l] = ell.alpha[first]
             ell.beta[l] = ell.beta[first]
-    evaluate_chunk(p.wake.lattice, p.wake.sheet, ell.pos, ell.euler, ell.speed, ell.alpha, ell.beta, 0, LANES, ell.c,
-                   ell.gamma, ell.vpts, ell.wind_ned, ell.wind_b, ell.omega_b, ell.omega_ned,
-                   ell.keep if last_substep else ell.no_keep)
+    lat = p.wake.lattice
+    solve_chunk_lanes(lat, p.wake.sheet, ell.pos, ell.euler, ell.speed, ell.alpha, ell.beta, 0, LANES, ell.c,
+                      ell.gamma, keep)
+    field_chunk(lat, ell.pos, 0, LANES, ell.c, ell.vpts, ell.wind_ned, ell.wind_b, ell.omega_b, ell.omega_ned)
 
 
 @_jit_inline
@@ -549,7 +567,7 @@ def formation_saving(p, s, b, crashed_any, solved_last, sc, o):
             for a in range(sc.known.shape[0]):
                 o.saving[b, a] = 0.0
         elif solved_last:
-            # the isolated circulations from the diagonal blocks of that solve's AIC (kept by physics_and_events)
+            # the isolated circulations from the diagonal blocks of that solve's AIC (kept by solve_chunk)
             induced_drag_saving_one(p.wake, p.wake_alone, sc.ell_pos, sc.ell_euler, sc.ell_speed, sc.ell_alpha,
                                     sc.ell_beta, s.circulation[b], o.saving[b], AIR_DENSITY_SL, sc.aic_keep)
         else:

@@ -39,7 +39,7 @@ import numpy as np
 
 from .dispatch import PARALLEL_MIN_BATCH, EntryPoints, run_chunks
 from .params import TURBULENCE_OFF, StepParams
-from ..wake.across import LANES
+from ..wake.across import LANES, lanes_apply
 from .kernels import WAKE_HOLD
 from .stages import (advance_turbulence, ambient_wind, control, crash_and_slot_error, decision_over, decision_scratch,
                      demands, ell_chunk, episode_flags, field_scratch, formation_benefit, formation_saving,
@@ -69,18 +69,27 @@ def refresh_formation(p, s, b):
         sample_turbulence(p.turbulence, p.field, s, b, struct_view(field_scratch(nv)), s.step[b] * p.dt_s)
 
 
+#: the fewest formations a chunk solves at once (:func:`decide_chunk`): a chunk's solve costs the same for any
+#: number of formations up to LANES, about 0.55 of one formation's own solve per lane on this machine's AVX-512
+#: (1 thread, B = 1,024), so from just over half the lanes on the chunk is the cheaper
+CHUNK_MIN = LANES // 2 + 1
+
+
 @_jit_inline
 def decide_chunk(p, s, b0, nl, actions, o, ell):
     """One decision of formations b0..b0+nl-1 (nl <= LANES) with ``actions`` (B, V, 4): each formation's substeps,
-    the ELL of the chunk's formations solved together (:func:`formation_env.sim.stages.solve_chunk`), then each
+    where nl >= :data:`CHUNK_MIN` the ELL of the chunk's formations solved together
+    (:func:`formation_env.sim.stages.solve_chunk`; ``ell`` an :class:`~formation_env.sim.stages.EllChunk` of LANES
+    lanes), else each formation's on its own (:func:`formation_env.sim.stages.physics_and_events`); then each
     formation's observation, reward and events into ``o`` (the stages: :mod:`formation_env.sim.stages`). Every
-    formation's numbers are those of its own decision alone: the chunk shares the solve's instructions, not its
-    values.
+    formation's numbers are those of its own decision alone, either way: the chunk shares the solve's
+    instructions, not its values.
 
     Collision: the smallest CG separation over the decision's physics steps below the collision
     separation (a step that also made a state non-finite is judged from its pre-step positions and
     velocities, :func:`formation_env.sim.kernels.step_separation`). A UAV whose state went non-finite
     is measured (slot error, separation) at its last finite position, so ``o`` never carries NaN."""
+    chunked = nl >= CHUNK_MIN and ell.c.piv.shape[0] > 0
     scs = [decision_scratch(s, b0 + l, p.benefit_on) for l in range(nl)]
     min_sep = np.full(nl, np.inf)
     flying = np.ones(nl, np.bool_)  # the formation's substeps go on (none of its UAVs left the envelope or collided)
@@ -98,7 +107,7 @@ def decide_chunk(p, s, b0, nl, actions, o, ell):
                 ambient_wind(p.scenario, s, b, t, sc.ambient, sc.gust3)
                 control(p, s, b, actions[b], sc)
                 physics_before_wake(p, s, b, last, sc, ell, l)
-        solve_chunk(p, ell, nl, last)
+        solve_chunk(p, ell, nl, last, chunked)
         for l in range(nl):
             if flying[l]:
                 b, sc = b0 + l, scs[l]
@@ -132,7 +141,7 @@ def decide_packed(ps, actions, start, stop):
     """:func:`decide_chunk` for formations start..stop-1, LANES at a time, the (params, state, out) structs packed in
     ``ps`` (a :class:`~formation_env.sim.dispatch.StepStructs`); releases the GIL (threads run chunks)."""
     p, s, o = ps.p, ps.s, ps.o
-    ell = ell_chunk(p, s)
+    ell = ell_chunk(p, s, stop - start >= CHUNK_MIN and lanes_apply(p.wake.lattice))
     b0 = start
     while b0 < stop:
         nl = min(LANES, stop - b0)

@@ -41,7 +41,7 @@ from .field import field_velocity
 from .posing import bound_length, branch_directions, place_lattice, to_ned
 from .structs import LatticeArrays, PosedLattice
 
-__all__ = ["LANES", "N_ROWS", "ChunkScratch", "chunk_scratch", "evaluate_chunk", "lanes_apply", "lu_solve_lanes", "evaluate_batch_lanes_serial",
+__all__ = ["LANES", "N_ROWS", "ChunkScratch", "chunk_scratch", "solve_chunk_lanes", "field_chunk", "evaluate_chunk", "lanes_apply", "lu_solve_lanes", "evaluate_batch_lanes_serial",
            "evaluate_batch_lanes_parallel"]
 
 _jit = nb.njit(cache=True, fastmath=False, error_model="numpy")
@@ -85,17 +85,18 @@ class ChunkScratch(NamedTuple):
 
 
 @_jit
-def chunk_scratch(n_vehicles, n_knots, n_surfaces, n_panels, sheet_law):
-    """A :class:`ChunkScratch` for a lattice of that size (``sheet_law``: room for the sheet law's strips)."""
+def chunk_scratch(n_vehicles, n_knots, n_surfaces, n_panels, sheet_law, lanes=LANES):
+    """A :class:`ChunkScratch` for a lattice of that size (``sheet_law``: room for the sheet law's strips);
+    ``lanes``: LANES, or 0 for an empty one of the same type (a caller that solves no chunk)."""
     n_strips = n_knots if sheet_law else 0
     return ChunkScratch(
-        s=np.zeros(n_knots * _STRIDE), p=np.zeros(_N_HEAD * LANES), rot=np.empty((LANES, n_vehicles, 3, 3)),
-        vel=np.empty((LANES, n_vehicles, 3)), trail=np.empty((LANES, n_vehicles, 3)),
-        x1=np.empty((LANES, n_knots, 3)), x3=np.empty((LANES, n_knots, 3)), origin=np.empty((LANES, n_surfaces, 3)),
-        bound_dir=np.empty((LANES, n_knots, 3)), chord_dir=np.empty((LANES, n_knots, 3)),
-        frames=np.empty((LANES, n_strips, 11)), aic=np.empty((n_panels, n_panels, LANES)),
-        rhs=np.empty((n_panels, LANES)), vcross=np.zeros((n_panels, n_panels, 3, LANES)),
-        piv=np.empty(LANES, np.int64))
+        s=np.zeros(n_knots * N_ROWS * lanes), p=np.zeros(_N_HEAD * lanes), rot=np.empty((lanes, n_vehicles, 3, 3)),
+        vel=np.empty((lanes, n_vehicles, 3)), trail=np.empty((lanes, n_vehicles, 3)),
+        x1=np.empty((lanes, n_knots, 3)), x3=np.empty((lanes, n_knots, 3)), origin=np.empty((lanes, n_surfaces, 3)),
+        bound_dir=np.empty((lanes, n_knots, 3)), chord_dir=np.empty((lanes, n_knots, 3)),
+        frames=np.empty((lanes, n_strips, 11)), aic=np.empty((n_panels, n_panels, lanes)),
+        rhs=np.empty((n_panels, lanes)), vcross=np.zeros((n_panels, n_panels, 3, lanes)),
+        piv=np.empty(lanes, np.int64))
 
 
 @_jit
@@ -500,15 +501,11 @@ def _field_from_solve(pv, g, vcross, b0, nl, vpts_out):
 
 
 @_jit
-def evaluate_chunk(lat, sheet, pos, euler, airspeed, alpha, beta, b0, nl, c, gamma_out, vpts_out, wind_ned_out,
-                   wind_b_out, omega_b_out, omega_ned_out, keep=None):
-    """:func:`formation_env.wake.kernels.evaluate_one` of formations b0..b0+nl-1 (nl <= LANES) of the batch: poses
-    and air data (B, V, ...) as ``evaluate_one``'s with the batch axis first, outputs likewise (circulation (B, N),
-    the other vehicles' induced velocity at the evaluation points (B, N, 3) NED, the winds (B, V, 3)); ``lat`` a
-    :class:`~formation_env.wake.structs.LatticeArrays` (the field read off the solve where :func:`lanes_apply`
-    holds, else evaluated at the evaluation points formation by formation), ``sheet`` the kernels' switch (None or :data:`~formation_env.wake.biot_savart.SHEET_ON`), ``c`` a :func:`chunk_scratch` of its size;
-    ``keep`` (B, N, N + 1) or None: each formation's AIC and right-hand side before the elimination (as
-    :func:`formation_env.wake.aic.assemble_and_solve`'s). Bit for bit the per-formation kernel's results."""
+def solve_chunk_lanes(lat, sheet, pos, euler, airspeed, alpha, beta, b0, nl, c, gamma_out, keep):
+    """The joint solve of formations b0..b0+nl-1 (nl <= LANES) of the batch: their poses into the chunk scratch
+    ``c`` (a :func:`chunk_scratch`), each lane's AIC and right-hand side assembled, kept in ``keep`` (B, N, N + 1)
+    when it has rows, eliminated, the circulation into ``gamma_out`` (B, N); the lanes' other vehicles' horseshoe
+    vectors at the control points stay in ``c.vcross``. Arguments as :func:`evaluate_chunk`'s."""
     s, pt = c.s, c.p
     kv, ksk, pv = lat.knot_vehicle, lat.surface_knot_start, lat.panel_vehicle
     n_panels = pv.shape[0]
@@ -554,7 +551,7 @@ def evaluate_chunk(lat, sheet, pos, euler, airspeed, alpha, beta, b0, nl, c, gam
         for l in range(LANES):
             v = c.vel[l, vj]
             rhs[j, l] = v[0] * pt[N0 + l] + v[1] * pt[N1 + l] + v[2] * pt[N2 + l]
-    if keep is not None and keep.shape[0] > 0:
+    if keep.shape[0] > 0:
         for l in range(nl):
             for j in range(n_panels):
                 for p in range(n_panels):
@@ -564,27 +561,57 @@ def evaluate_chunk(lat, sheet, pos, euler, airspeed, alpha, beta, b0, nl, c, gam
     for l in range(nl):
         for j in range(n_panels):
             gamma_out[b0 + l, j] = rhs[j, l]
+
+
+@_jit
+def field_chunk(lat, pos, b0, nl, c, vpts_out, wind_ned_out, wind_b_out, omega_b_out, omega_ned_out):
+    """After :func:`solve_chunk_lanes`, for a lattice whose field is read off the solve (:func:`lanes_apply`): the
+    other vehicles' induced velocity at the control points (B, N, 3) NED and each formation's effective wind
+    (:func:`formation_env.wake.kernels.effective_wind`). Arguments as :func:`evaluate_chunk`'s."""
+    _field_from_solve(lat.panel_vehicle, c.rhs, c.vcross, b0, nl, vpts_out)
+    for l in range(nl):
+        b = b0 + l
+        effective_wind(c.rot[l], vpts_out[b], lat.grad_w, lat.vehicle_panel_start, wind_ned_out[b], wind_b_out[b],
+                       omega_b_out[b], omega_ned_out[b])
+
+
+@_jit
+def evaluate_chunk(lat, sheet, pos, euler, airspeed, alpha, beta, b0, nl, c, gamma_out, vpts_out, wind_ned_out,
+                   wind_b_out, omega_b_out, omega_ned_out, keep):
+    """:func:`formation_env.wake.kernels.evaluate_one` of formations b0..b0+nl-1 (nl <= LANES) of the batch: poses
+    and air data (B, V, ...) as ``evaluate_one``'s with the batch axis first, outputs likewise (circulation (B, N),
+    the other vehicles' induced velocity at the evaluation points (B, N, 3) NED, the winds (B, V, 3)); ``lat`` a
+    :class:`~formation_env.wake.structs.LatticeArrays` (the field read off the solve where :func:`lanes_apply`
+    holds, else evaluated at the evaluation points formation by formation), ``sheet`` the kernels' switch (None or
+    :data:`~formation_env.wake.biot_savart.SHEET_ON`), ``c`` a :func:`chunk_scratch` of its size; ``keep``
+    (B, N, N + 1), or (0, N, N + 1) for none: each formation's AIC and right-hand side before the elimination (as
+    :func:`formation_env.wake.aic.assemble_and_solve`'s). Bit for bit the per-formation kernel's results."""
+    solve_chunk_lanes(lat, sheet, pos, euler, airspeed, alpha, beta, b0, nl, c, gamma_out, keep)
     if lanes_apply(lat):
-        _field_from_solve(pv, rhs, vcross, b0, nl, vpts_out)
-    else:  # the field's own branches at the evaluation points (evaluate_one's other path), formation by formation
-        n_knots_ = lat.knot_x1_b.shape[0]
-        r1, inv1, r3, inv3 = np.empty((n_knots_, 3)), np.empty(n_knots_), np.empty((n_knots_, 3)), np.empty(n_knots_)
-        pt3 = np.empty(3)
-        for l in range(nl):
-            b = b0 + l
-            posed = PosedLattice(pos[b], airspeed[b], c.rot[l], c.vel[l], c.trail[l], c.x1[l], c.x3[l], c.origin[l],
-                                 c.bound_dir[l], c.chord_dir[l], r1, inv1, r3, inv3)
-            for j in range(n_panels):
-                v = pv[j]
-                to_ned(c.rot[l, v], pos[b, v], lat.eval_b[j], pt3)
-                recv_w = 0.0
-                if sheet_on(sheet):
-                    recv_w = bound_length(c.x1[l], lat.panel_left_knot[j])
-                wx_, wy_, wz_ = field_velocity(pt3[0], pt3[1], pt3[2], v, False, lat, posed, gamma_out[b], lat.core_mode,
-                                               overlap_core, sheet, recv_w, c.frames[l])
-                vpts_out[b, j, 0] = wx_
-                vpts_out[b, j, 1] = wy_
-                vpts_out[b, j, 2] = wz_
+        field_chunk(lat, pos, b0, nl, c, vpts_out, wind_ned_out, wind_b_out, omega_b_out, omega_ned_out)
+        return
+    # the field's own branches at the evaluation points (evaluate_one's other path), formation by formation
+    n_panels = lat.panel_vehicle.shape[0]
+    pv = lat.panel_vehicle
+    overlap_core = lat.overlap_core_m
+    n_knots_ = lat.knot_x1_b.shape[0]
+    r1, inv1, r3, inv3 = np.empty((n_knots_, 3)), np.empty(n_knots_), np.empty((n_knots_, 3)), np.empty(n_knots_)
+    pt3 = np.empty(3)
+    for l in range(nl):
+        b = b0 + l
+        posed = PosedLattice(pos[b], airspeed[b], c.rot[l], c.vel[l], c.trail[l], c.x1[l], c.x3[l], c.origin[l],
+                             c.bound_dir[l], c.chord_dir[l], r1, inv1, r3, inv3)
+        for j in range(n_panels):
+            v = pv[j]
+            to_ned(c.rot[l, v], pos[b, v], lat.eval_b[j], pt3)
+            recv_w = 0.0
+            if sheet_on(sheet):
+                recv_w = bound_length(c.x1[l], lat.panel_left_knot[j])
+            wx_, wy_, wz_ = field_velocity(pt3[0], pt3[1], pt3[2], v, False, lat, posed, gamma_out[b], lat.core_mode,
+                                           overlap_core, sheet, recv_w, c.frames[l])
+            vpts_out[b, j, 0] = wx_
+            vpts_out[b, j, 1] = wy_
+            vpts_out[b, j, 2] = wz_
     for l in range(nl):
         b = b0 + l
         effective_wind(c.rot[l], vpts_out[b], lat.grad_w, lat.vehicle_panel_start, wind_ned_out[b], wind_b_out[b],
@@ -608,10 +635,11 @@ def _make_batch(parallel: bool):
         for blk in nb.prange(n_blocks):
             c = chunk_scratch(pos.shape[1], lat.knot_x1_b.shape[0], lat.surface_origin_b.shape[0],
                               lat.panel_vehicle.shape[0], sheet_on(sheet))
+            no_keep = np.empty((0, lat.panel_vehicle.shape[0], lat.panel_vehicle.shape[0] + 1))
             for ci in range(blk * n_chunks // n_blocks, (blk + 1) * n_chunks // n_blocks):
                 b0 = ci * LANES
                 evaluate_chunk(lat, sheet, pos, euler, airspeed, alpha, beta, b0, min(LANES, n - b0), c, gamma_out,
-                               vpts_out, wind_ned_out, wind_b_out, omega_b_out, omega_ned_out)
+                               vpts_out, wind_ned_out, wind_b_out, omega_b_out, omega_ned_out, no_keep)
 
     return evaluate_batch_lanes
 
