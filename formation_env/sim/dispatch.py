@@ -4,10 +4,9 @@ independent, so serial, threaded, packed, direct and numba's own dispatcher give
 
 * :func:`run_chunks` runs ``kernel(*args, start, stop)`` over formations 0..n-1, serially or on the calling
   thread plus ``numba.get_num_threads() - 1`` pool workers (``NUMBA_NUM_THREADS`` applies) taking chunks of
-  formations (whole multiples of the ELL's lanes, :data:`formation_env.wake.across.LANES`, from two such chunks a
-  thread on) from a
-  shared counter (:func:`run_parallel`). The kernels release the GIL. A queue rather than
-  numba's ``prange``: ``prange`` cannot take the step's named structs of arrays, and its OpenMP barrier waits
+  formations (whole multiples of the ELL's lanes, :data:`formation_env.wake.across.LANES`, once a batch has two
+  such chunks a thread) from a shared counter (:func:`run_parallel`). The kernels release the GIL. A queue rather
+  than numba's ``prange``: ``prange`` cannot take the step's named structs of arrays, and its OpenMP barrier waits
   for the slowest thread, which collapsed under a busy core; with a queue, a thread on a busy core simply takes
   fewer chunks.
 * :class:`ThreadTuner` chooses serial or threaded per (kernel, batch size) by measuring both, so a busy

@@ -1,7 +1,7 @@
 """One compiled, batched decision step: ``step(params, state, actions) -> StepOutput``.
 
-Per formation (B formations over a thread pool, in chunks of :data:`formation_env.wake.across.LANES`) and per
-physics substep, in this order (thesis chapter 6's loop, the Simulink model's order):
+Per formation (B formations over a thread pool, in chunks of up to :data:`formation_env.wake.across.LANES`) and
+per physics substep, in this order (thesis chapter 6's loop, the Simulink model's order):
 
 1. guidance: vehicle 0's reference path and the followers' slot demands (:mod:`.guidance`);
 2. ambient wind: scenario gusts + steady wind + the turbulence at each UAV (sampled at its
@@ -10,9 +10,11 @@ physics substep, in this order (thesis chapter 6's loop, the Simulink model's or
    with the agents' actions mapped per mode: ``setpoints`` moves the PID's demands, ``residual`` adds
    to its command, ``surfaces`` replaces it;
 4. ELL effective wind every ``wake_update_every``-th substep (Eqs. 4.4-4.7), Aerosonde RK4 and
-   the envelope (:func:`formation_env.sim.kernels.step_one`'s stages); the ELL of the chunk's formations is
-   solved at once, the formations as the vector lanes (:func:`formation_env.wake.across.evaluate_chunk`: every
-   formation's numbers those of its own solve, bit for bit);
+   the envelope (:func:`formation_env.sim.kernels.step_one`'s stages). A chunk of at least :data:`CHUNK_MIN`
+   formations of a small lattice (:func:`formation_env.wake.across.chunk_pays`) solves its ELL at once, the
+   formations as the vector lanes (:mod:`formation_env.wake.across`); fewer formations (a single env, a
+   batch's remainder) and larger lattices solve one formation at a time. Either way every formation's numbers
+   are those of its own solve, bit for bit;
 5. turbulence field advanced one step and sampled at the new positions;
 6. the manoeuvring reference path integrated, the step's separation checked (collision, envelope).
 
@@ -39,7 +41,7 @@ import numpy as np
 
 from .dispatch import PARALLEL_MIN_BATCH, EntryPoints, run_chunks
 from .params import TURBULENCE_OFF, StepParams
-from ..wake.across import LANES, lanes_apply
+from ..wake.across import LANES, chunk_pays
 from .kernels import WAKE_HOLD
 from .stages import (advance_turbulence, ambient_wind, control, crash_and_slot_error, decision_over, decision_scratch,
                      demands, ell_chunk, episode_flags, field_scratch, formation_benefit, formation_saving,
@@ -70,8 +72,8 @@ def refresh_formation(p, s, b):
 
 
 #: the fewest formations a chunk solves at once (:func:`decide_chunk`): a chunk's solve costs the same for any
-#: number of formations up to LANES, about 0.55 of one formation's own solve per lane on this machine's AVX-512
-#: (1 thread, B = 1,024), so from just over half the lanes on the chunk is the cheaper
+#: number of formations up to LANES, and per lane about half of one formation's own solve, so from just over half
+#: the lanes filled on the chunk is the cheaper
 CHUNK_MIN = LANES // 2 + 1
 
 
@@ -141,7 +143,7 @@ def decide_packed(ps, actions, start, stop):
     """:func:`decide_chunk` for formations start..stop-1, LANES at a time, the (params, state, out) structs packed in
     ``ps`` (a :class:`~formation_env.sim.dispatch.StepStructs`); releases the GIL (threads run chunks)."""
     p, s, o = ps.p, ps.s, ps.o
-    ell = ell_chunk(p, s, stop - start >= CHUNK_MIN and lanes_apply(p.wake.lattice))
+    ell = ell_chunk(p, s, stop - start >= CHUNK_MIN and chunk_pays(p.wake.lattice))
     b0 = start
     while b0 < stop:
         nl = min(LANES, stop - b0)

@@ -41,7 +41,8 @@ from .field import field_velocity
 from .posing import bound_length, branch_directions, place_lattice, to_ned
 from .structs import LatticeArrays, PosedLattice
 
-__all__ = ["LANES", "N_ROWS", "ChunkScratch", "chunk_scratch", "solve_chunk_lanes", "field_chunk", "evaluate_chunk", "lanes_apply", "lu_solve_lanes", "evaluate_batch_lanes_serial",
+__all__ = ["LANES", "MAX_PANELS", "N_ROWS", "chunk_pays", "ChunkScratch", "chunk_scratch", "solve_chunk_lanes",
+           "field_chunk", "evaluate_chunk", "lanes_apply", "lu_solve_lanes", "evaluate_batch_lanes_serial",
            "evaluate_batch_lanes_parallel"]
 
 _jit = nb.njit(cache=True, fastmath=False, error_model="numpy")
@@ -97,6 +98,19 @@ def chunk_scratch(n_vehicles, n_knots, n_surfaces, n_panels, sheet_law, lanes=LA
         frames=np.empty((lanes, n_strips, 11)), aic=np.empty((n_panels, n_panels, lanes)),
         rhs=np.empty((n_panels, lanes)), vcross=np.zeros((n_panels, n_panels, 3, lanes)),
         piv=np.empty(lanes, np.int64))
+
+
+#: the most panels a chunk solves across lanes: its AIC and the other vehicles' horseshoe vectors at the control
+#: points hold N^2 * 4 * LANES float64 (0.2 MB for two Aerosondes, 20 panels; 0.46 MB for three; 1.3 MB for five),
+#: and past a core's L2 cache the per-formation solve, whose arrays are LANES times smaller, is the faster
+MAX_PANELS = 30
+
+
+@_jit
+def chunk_pays(lat):
+    """Whether the decision solves a chunk of formations of this lattice across lanes: :func:`lanes_apply`, and at
+    most :data:`MAX_PANELS` panels."""
+    return lat.panel_vehicle.shape[0] <= MAX_PANELS and lanes_apply(lat)
 
 
 @_jit
@@ -627,7 +641,8 @@ def _make_batch(parallel: bool):
     def evaluate_batch_lanes(lattice, pos, euler, airspeed, alpha, beta, gamma_out, vpts_out, wind_ned_out,
                              wind_b_out, omega_b_out, omega_ned_out, sheet=None):
         """:func:`evaluate_chunk` over a batch of B formations, LANES at a time (arguments as
-        :func:`formation_env.wake.kernels.evaluate_batch_serial`'s); the chunks are shared among the threads in blocks, each block with one scratch."""
+        :func:`formation_env.wake.kernels.evaluate_batch_serial`'s); the chunks are shared among the threads in
+        blocks, each block with one scratch."""
         lat = LatticeArrays(*lattice)
         n = pos.shape[0]
         n_chunks = (n + LANES - 1) // LANES
