@@ -89,9 +89,15 @@ def print_human(results: dict) -> None:
         print(f"  single evaluation      {w['single_evaluation_us']:9.1f} us   (thesis: {w['thesis_s'] * 1e3:.0f} ms;"
               f" {w['speedup_vs_thesis']:.0f}x faster)")
         print(f"  single incl. meshing   {w['single_with_meshing_us']:9.1f} us")
-        for b, r in w["batched"].items():
-            print(f"  batch {int(b):5d}             {r['formation_evaluations_per_s']:9.0f} formation-evaluations/s"
-                  f"  ({r['us_per_formation']:.1f} us each)" + (f", {r['gflops']:.2f} GFLOP/s" if "gflops" in r else ""))
+        for b, rows in w["batched"].items():
+            for r in rows.values():
+                print(f"  batch {int(b):5d}, {r['kernel'].replace('_', ' '):13s}, {r['threads']} thread"
+                      f"{'s' if r['threads'] > 1 else ' '} {r['formation_evaluations_per_s']:9.0f} formation-evaluations/s"
+                      f"  ({r['us_per_formation']:.2f} us each), {r['gflops']:.2f} GFLOP/s"
+                      f" ({r['gflops_per_core']:.2f} a core)")
+        peak = w.get("peak_per_core")
+        if peak and peak.get("gflops"):
+            print(f"  nominal peak           {peak['gflops']:9.1f} GFLOP/s a core ({peak['derivation']})")
         if "flops_per_evaluation" in w:
             fl = w["flops_per_evaluation"]
             print(f"  ELL GFLOP/s            {w['gflops_single']:9.2f} (single evaluation), counting {fl['total']:,} flops "

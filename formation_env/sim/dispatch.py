@@ -4,8 +4,9 @@ independent, so serial, threaded, packed, direct and numba's own dispatcher give
 
 * :func:`run_chunks` runs ``kernel(*args, start, stop)`` over formations 0..n-1, serially or on the calling
   thread plus ``numba.get_num_threads() - 1`` pool workers (``NUMBA_NUM_THREADS`` applies) taking chunks of
-  formations from a shared counter (:func:`run_parallel`). The kernels release the GIL. A queue rather than
-  numba's ``prange``: ``prange`` cannot take the step's named structs of arrays, and its OpenMP barrier waits
+  formations (whole multiples of the ELL's lanes, :data:`formation_env.wake.across.LANES`, once a batch has two
+  such chunks a thread) from a shared counter (:func:`run_parallel`). The kernels release the GIL. A queue rather
+  than numba's ``prange``: ``prange`` cannot take the step's named structs of arrays, and its OpenMP barrier waits
   for the slowest thread, which collapsed under a busy core; with a queue, a thread on a busy core simply takes
   fewer chunks.
 * :class:`ThreadTuner` chooses serial or threaded per (kernel, batch size) by measuring both, so a busy
@@ -29,6 +30,7 @@ from numba.core import types as nbt
 from numba.experimental import structref
 from numba.extending import overload
 
+from ..wake.across import LANES
 from .views import struct_view, view_type
 
 __all__ = ["PARALLEL_MIN_BATCH", "threads", "run_parallel", "ThreadTuner", "run_chunks", "StepStructs",
@@ -55,6 +57,8 @@ def run_parallel(kernel, n: int, args: tuple | list, n_threads: int) -> None:
             _POOL.shutdown(wait=False)
         _POOL, _POOL_SIZE = ThreadPoolExecutor(n_threads - 1, thread_name_prefix="formation-step"), n_threads - 1
     chunk = max(1, -(-n // (4 * n_threads)))
+    if n >= 2 * LANES * n_threads:  # whole chunks of the decision's ELL lanes (formation_env.wake.across), two a thread
+        chunk = -(-chunk // LANES) * LANES
     n_chunks = -(-n // chunk)
     counter = itertools.count()  # next() is atomic under the GIL
 

@@ -92,7 +92,7 @@ def ell_inputs(state, ambient, wing_origin_b, pos, euler, speed, alpha, beta):
 
 
 @_jit
-def _clear_wake(held_wind, held_omega, gamma):
+def clear_wake(held_wind, held_omega, gamma):
     """No induced wind and no circulation (a formation outside the envelope, or a degenerate solve)."""
     for a in range(held_wind.shape[0]):
         for i in range(3):
@@ -102,9 +102,70 @@ def _clear_wake(held_wind, held_omega, gamma):
         gamma[j] = 0.0
 
 
-# inlined into its callers at numba IR level (the decision, step_range): as a compiled function of its own it was
-# one more copy of the ELL solve and the RK4 for numba to link and re-optimise
-@nb.njit(cache=True, error_model="numpy", inline="always")
+#: what a physics step does with the ELL (:func:`wake_action`): keep the held induced wind, solve, or clear it
+WAKE_HOLD, WAKE_SOLVE, WAKE_CLEAR = 0, 1, 2
+
+# the functions below are inlined into their callers at numba IR level (the decision, step_range): as compiled
+# functions of their own each was one more copy of the ELL solve or the RK4 for numba to link and re-optimise
+_jit_inline = nb.njit(cache=True, error_model="numpy", inline="always")
+
+
+@_jit_inline
+def wake_action(state, ambient, turb, held_wind, held_omega, update_wake, wake_on, aircraft):
+    """What one physics step of a formation (V aircraft) does with the ELL: ``WAKE_HOLD`` (not an update step:
+    the held induced wind stays), ``WAKE_SOLVE``, or ``WAKE_CLEAR`` (the wake is off, or an aircraft is outside
+    the envelope with the held wind: its episode is ending, it flies without induced wind). Arguments as
+    :func:`step_one`'s."""
+    if not update_wake:
+        return WAKE_HOLD
+    if not wake_on:
+        return WAKE_CLEAR
+    wind = np.zeros(12)
+    for a in range(state.shape[0]):
+        for i in range(3):
+            wind[i] = ambient[a, i]
+            wind[3 + i] = turb[a, i]
+            wind[6 + i] = held_wind[a, i]
+            wind[9 + i] = held_omega[a, i]
+        if envelope_status(state[a], wind, aircraft.scalars, aircraft.limits) != 0:
+            return WAKE_CLEAR
+    return WAKE_SOLVE
+
+
+@_jit_inline
+def clear_if_not_finite(held_wind, held_omega, gamma):
+    """After a solve: the ELL stays bounded at any separation (the overlap core); should a solve still come out
+    non-finite (degenerate input), the formation flies without induced wind this step rather than feeding NaN to
+    the aircraft."""
+    finite = True
+    for a in range(held_wind.shape[0]):
+        for i in range(3):
+            if not (math.isfinite(held_wind[a, i]) and math.isfinite(held_omega[a, i])):
+                finite = False
+    if not finite:
+        clear_wake(held_wind, held_omega, gamma)
+
+
+@_jit_inline
+def integrate_one(state, controls, ambient, turb, turb_omega, held_wind, held_omega, aircraft, dt, out_state,
+                  out_status):
+    """RK4 of one formation over dt with the held induced wind and the envelope status after it (arguments as
+    :func:`step_one`'s)."""
+    ac = aircraft
+    nv = state.shape[0]
+    wind = np.zeros((nv, 12))
+    for a in range(nv):
+        for i in range(3):
+            wind[a, i] = ambient[a, i]
+            wind[a, 3 + i] = turb[a, i]
+            wind[a, 6 + i] = held_wind[a, i]
+            wind[a, 9 + i] = held_omega[a, i] + turb_omega[a, i]
+    rk4_batch(state, controls, wind, dt, ac, out_state)
+    for a in range(nv):
+        out_status[a] = envelope_status(out_state[a], wind[a], ac.scalars, ac.limits)
+
+
+@_jit_inline
 def step_one(state, controls, ambient, turb, turb_omega, held_wind, held_omega, gamma, update_wake, wake_on, wake,
              coupling, aircraft, dt, out_state, out_status, keep=None):
     """One formation (V aircraft) by one step dt: ELL induced wind when ``update_wake`` (held
@@ -117,51 +178,25 @@ def step_one(state, controls, ambient, turb, turb_omega, held_wind, held_omega, 
     wind, :func:`~formation_env.wake.coupling.coupled_wind`), ``aircraft`` an
     :class:`~formation_env.sim.params.AircraftArrays`. A formation with an aircraft outside the
     envelope gets no wake solve and zero induced wind (its episode is ending). ``keep``: the solve's AIC and
-    right-hand side before elimination (:func:`formation_env.wake.aic.assemble_and_solve`; None or empty: not kept)."""
-    ac = aircraft
+    right-hand side before elimination (:func:`formation_env.wake.aic.assemble_and_solve`; None or empty: not kept).
+    The decision step runs the same stages with the solve of a chunk of formations at once
+    (:func:`formation_env.sim.stages.physics_before_wake`)."""
     nv = state.shape[0]
-    wind = np.zeros((nv, 12))
-    for a in range(nv):
-        for i in range(3):
-            wind[a, i] = ambient[a, i]
-            wind[a, 3 + i] = turb[a, i]
-    if update_wake:
-        ok = wake_on
-        if ok:
-            for a in range(nv):
-                for i in range(3):
-                    wind[a, 6 + i] = held_wind[a, i]
-                    wind[a, 9 + i] = held_omega[a, i]
-                if envelope_status(state[a], wind[a], ac.scalars, ac.limits) != 0:
-                    ok = False
-        if ok:
-            pos = np.empty((nv, 3))
-            euler = np.empty((nv, 3))
-            speed = np.empty(nv)
-            alpha = np.empty(nv)
-            beta = np.empty(nv)
-            ell_inputs(state, ambient, wake.wing_origin_body, pos, euler, speed, alpha, beta)
-            coupled_wind(wake, coupling, pos, euler, speed, alpha, beta, gamma, np.empty((wake.n_panels, 3)),
-                         held_wind, np.empty((nv, 3)), held_omega, np.empty((nv, 3)), keep)
-            # The ELL stays bounded at any separation (the overlap core); should a solve still come
-            # out non-finite (degenerate input), the formation flies without induced wind this step
-            # rather than feeding NaN to the aircraft.
-            finite = True
-            for a in range(nv):
-                for i in range(3):
-                    if not (math.isfinite(held_wind[a, i]) and math.isfinite(held_omega[a, i])):
-                        finite = False
-            if not finite:
-                _clear_wake(held_wind, held_omega, gamma)
-        else:
-            _clear_wake(held_wind, held_omega, gamma)
-    for a in range(nv):
-        for i in range(3):
-            wind[a, 6 + i] = held_wind[a, i]
-            wind[a, 9 + i] = held_omega[a, i] + turb_omega[a, i]
-    rk4_batch(state, controls, wind, dt, ac, out_state)
-    for a in range(nv):
-        out_status[a] = envelope_status(out_state[a], wind[a], ac.scalars, ac.limits)
+    act = wake_action(state, ambient, turb, held_wind, held_omega, update_wake, wake_on, aircraft)
+    if act == WAKE_SOLVE:
+        pos = np.empty((nv, 3))
+        euler = np.empty((nv, 3))
+        speed = np.empty(nv)
+        alpha = np.empty(nv)
+        beta = np.empty(nv)
+        ell_inputs(state, ambient, wake.wing_origin_body, pos, euler, speed, alpha, beta)
+        coupled_wind(wake, coupling, pos, euler, speed, alpha, beta, gamma, np.empty((wake.n_panels, 3)),
+                     held_wind, np.empty((nv, 3)), held_omega, np.empty((nv, 3)), keep)
+        clear_if_not_finite(held_wind, held_omega, gamma)
+    elif act == WAKE_CLEAR:
+        clear_wake(held_wind, held_omega, gamma)
+    integrate_one(state, controls, ambient, turb, turb_omega, held_wind, held_omega, aircraft, dt, out_state,
+                  out_status)
 
 
 @nb.njit(cache=True, nogil=True, error_model="numpy")

@@ -1,5 +1,6 @@
 """ELL benchmarks: one evaluation (pose, joint solve, effective wind) for two Aerosondes with 10
-horseshoes each, and batches of such formations. Medians of repeated runs; no assertions."""
+horseshoes each, and batches of such formations through the per-formation kernel and the batch-lane kernel, with
+one thread and with all. Medians of repeated runs; no assertions."""
 
 from __future__ import annotations
 
@@ -12,7 +13,7 @@ from ..geometry import aerosonde
 from .model import WakeModel
 from .state import FormationState
 
-__all__ = ["run_benchmarks", "aerosonde_pair_states", "ell_flops", "FLOPS"]
+__all__ = ["run_benchmarks", "aerosonde_pair_states", "ell_flops", "peak_gflops_per_core", "FLOPS"]
 
 THESIS_SECONDS_PER_EVALUATION = 0.072  # section 5.4.4, MATLAB on a Xeon E5410, nseg = 10
 
@@ -96,8 +97,43 @@ def _median_time(fn, repeats: int, inner: int) -> float:
     return float(np.median(times))
 
 
+def peak_gflops_per_core() -> dict:
+    """The nominal float64 peak of one core of this machine, and how it is derived: 2 FMA pipes x the vector's
+    float64 lanes (8 with AVX-512, 4 with AVX2, else 2) x 2 flops an FMA x the clock (``cpu MHz`` of
+    /proc/cpuinfo, Linux; None elsewhere). An upper bound: cores that run 512-bit vectors as two 256-bit halves
+    (AMD Zen 4) reach half of it, and code without FMA contraction (the kernels here: no fastmath) half again."""
+    try:
+        text = open("/proc/cpuinfo", encoding="utf-8").read()
+    except OSError:
+        return {"gflops": None, "derivation": "no /proc/cpuinfo: the clock is unknown"}
+    mhz = next((float(line.split(":")[1]) for line in text.splitlines() if line.startswith("cpu MHz")), None)
+    flags = next((line.split(":")[1].split() for line in text.splitlines() if line.startswith("flags")), [])
+    lanes, isa = (8, "AVX-512") if "avx512f" in flags else (4, "AVX2") if "avx2" in flags else (2, "SSE2")
+    if mhz is None:
+        return {"gflops": None, "derivation": "no cpu MHz in /proc/cpuinfo: the clock is unknown"}
+    return {"gflops": 2 * lanes * 2 * mhz / 1e3,
+            "derivation": f"2 FMA pipes x {lanes} float64 lanes ({isa}) x 2 flops x {mhz / 1e3:.2f} GHz"}
+
+
+def _lane_kernel_timer(model: WakeModel, states: FormationState):
+    """A call of the batch-lane ELL (:func:`formation_env.wake.across.evaluate_batch_lanes_parallel`, the
+    decision's chunked solve) on ``states``."""
+    from .across import evaluate_batch_lanes_parallel
+    from .biot_savart import SHEET_OFF, SHEET_ON
+
+    b, v, n = states.batch_size, model.n_vehicles, model.n_panels
+    out = [np.empty((b, n)), np.empty((b, n, 3))] + [np.empty((b, v, 3)) for _ in range(4)]
+    args = (model._lattice, states.position_ned, states.euler_rad, states.airspeed_mps, states.alpha_rad,
+            states.beta_rad, *out, SHEET_ON if model.sheet else SHEET_OFF)
+    return lambda: evaluate_batch_lanes_parallel(*args)
+
+
 def run_benchmarks(quick: bool = False) -> dict:
-    """Return ELL timings (seconds and rates) for batch 1 and the batch sizes of interest."""
+    """Return ELL timings (seconds and rates) for batch 1 and the batch sizes of interest: the per-formation
+    kernel (:meth:`WakeModel.evaluate`) and the batch-lane kernel (:mod:`formation_env.wake.across`), each with one
+    thread and with all of numba's, and the core's nominal peak they are measured against."""
+    import numba
+
     model = WakeModel([aerosonde(nseg=10), aerosonde(nseg=10)])
     single = aerosonde_pair_states(1)
     model.evaluate(single)  # compile / load the cache outside the timing
@@ -114,16 +150,26 @@ def run_benchmarks(quick: bool = False) -> dict:
         "single_with_meshing_us": t_cold * 1e6,
         "thesis_s": THESIS_SECONDS_PER_EVALUATION,
         "speedup_vs_thesis": THESIS_SECONDS_PER_EVALUATION / t_single,
+        "peak_per_core": peak_gflops_per_core(),
         "batched": {},
     }
+    n_threads = numba.get_num_threads()
     for batch in (64, 1024) if not quick else (1024,):
         states = aerosonde_pair_states(batch)
-        model.evaluate(states)
-        t = _median_time(lambda: model.evaluate(states), repeats, 3 if quick else 10)
-        out["batched"][str(batch)] = {
-            "seconds_per_call": t,
-            "formation_evaluations_per_s": batch / t,
-            "us_per_formation": t / batch * 1e6,
-            "gflops": flops["total"] * batch / t / 1e9,
-        }
+        kernels = {"per_formation": lambda: model.evaluate(states), "across_lanes": _lane_kernel_timer(model, states)}
+        rows = {}
+        for threads in sorted({1, n_threads}):
+            numba.set_num_threads(threads)
+            try:
+                for name, fn in kernels.items():
+                    fn()  # compile / load the cache outside the timing
+                    t = _median_time(fn, repeats, 3 if quick else 10)
+                    gflops = flops["total"] * batch / t / 1e9
+                    rows[f"{name}/{threads}"] = {
+                        "kernel": name, "threads": threads, "seconds_per_call": t,
+                        "formation_evaluations_per_s": batch / t, "us_per_formation": t / batch * 1e6,
+                        "gflops": gflops, "gflops_per_core": gflops / threads}
+            finally:
+                numba.set_num_threads(n_threads)
+        out["batched"][str(batch)] = rows
     return out

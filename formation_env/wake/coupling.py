@@ -39,7 +39,7 @@ from .posing import dcm_ned_to_body_1
 from .residual import add_wind_residual
 
 __all__ = ["COUPLINGS", "WAKE_FIDELITIES", "EFFECTIVE_WIND", "LOAD_WEIGHTED", "CouplingArrays", "coupling_arrays", "coupling_code",
-           "lift_matched_incidence_rad", "lift_matched_vehicle", "roll_weights", "load_weighted_wind", "coupled_wind"]
+           "lift_matched_incidence_rad", "lift_matched_vehicle", "roll_weights", "load_weighted_wind", "coupled_wind", "couple_solved"]
 
 EFFECTIVE_WIND, LOAD_WEIGHTED = 0, 1
 COUPLINGS = {"effective_wind": EFFECTIVE_WIND, "load_weighted": LOAD_WEIGHTED}
@@ -213,18 +213,25 @@ def load_weighted_wind(rot, vpts, gamma, c, vehicle_panel_start, wind_ned_out, w
 def coupled_wind(wake, coupling, pos, euler, speed, alpha, beta, gamma_out, vpts_out, wind_ned_out, wind_b_out,
                  omega_b_out, omega_ned_out, keep=None):
     """The ELL solve of one formation (:func:`formation_env.wake.arrays.evaluate_formation`: pose, joint
-    solve, the thesis's effective wind) and, with the ``load_weighted`` coupling, the load-weighted wind
-    in its place, plus, where ``wake.residual`` is a table, every ordered pair's residual
-    (:func:`formation_env.wake.residual.add_wind_residual`). Arguments as ``evaluate_formation``'s, ``coupling`` a
-    :class:`CouplingArrays`."""
+    solve, the thesis's effective wind), then :func:`couple_solved`. Arguments as ``evaluate_formation``'s,
+    ``coupling`` a :class:`CouplingArrays`."""
     evaluate_formation(wake, pos, euler, speed, alpha, beta, gamma_out, vpts_out, wind_ned_out, wind_b_out,
                        omega_b_out, omega_ned_out, keep)
+    couple_solved(wake, coupling, pos, euler, gamma_out, vpts_out, wind_ned_out, wind_b_out, omega_b_out, omega_ned_out)
+
+
+@_jit
+def couple_solved(wake, coupling, pos, euler, gamma, vpts, wind_ned_out, wind_b_out, omega_b_out, omega_ned_out):
+    """After one formation's solve (its circulation ``gamma``, the induced velocity ``vpts`` at the evaluation
+    points and the thesis's effective wind in the outputs): with the ``load_weighted`` coupling the
+    load-weighted wind in its place, plus, where ``wake.residual`` is a table, every ordered pair's residual
+    (:func:`formation_env.wake.residual.add_wind_residual`); nothing with the thesis's effective wind."""
     if coupling.mode == LOAD_WEIGHTED:
         nv = pos.shape[0]
         rot = np.empty((nv, 3, 3))
         for v in range(nv):
             dcm_ned_to_body_1(euler[v, 0], euler[v, 1], euler[v, 2], rot[v])
-        load_weighted_wind(rot, vpts_out, gamma_out, coupling, wake.lattice.vehicle_panel_start, wind_ned_out, wind_b_out,
+        load_weighted_wind(rot, vpts, gamma, coupling, wake.lattice.vehicle_panel_start, wind_ned_out, wind_b_out,
                            omega_b_out, omega_ned_out)
-        add_wind_residual(wake, wake.residual, pos, euler, gamma_out, rot, wind_ned_out, wind_b_out, omega_b_out,
+        add_wind_residual(wake, wake.residual, pos, euler, gamma, rot, wind_ned_out, wind_b_out, omega_b_out,
                           omega_ned_out)

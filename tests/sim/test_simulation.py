@@ -195,3 +195,65 @@ def test_a_batch_equals_its_formations_flown_one_by_one():
     for i, one in enumerate(singles):
         np.testing.assert_array_equal(batch.aircraft[i], one.aircraft[0])
         np.testing.assert_array_equal(batch.state.gust_ned[i], one.state.gust_ned[0])
+
+
+@pytest.fixture
+def one_thread():
+    """The whole batch in one kernel call (serial): its first LANES formations solve their ELL as one chunk."""
+    import numba
+
+    n = numba.get_num_threads()
+    numba.set_num_threads(1)
+    yield
+    numba.set_num_threads(n)
+
+
+@pytest.mark.parametrize("scenario,mode,benefit", [("formation_keeping", "setpoints", False),
+                                                   ("close_formation", "residual", True),
+                                                   ("echelon3", "setpoints", False)])
+def test_a_chunk_solved_across_lanes_equals_its_formations_flown_one_by_one(one_thread, scenario, mode, benefit):
+    """A batch of LANES + 3 formations: the first LANES solve their ELL across the vector lanes
+    (formation_env.wake.across), the other 3 (fewer than CHUNK_MIN) and every batch of one formation by formation;
+    the numbers are the same bit for bit, the benefit's kept AIC included."""
+    from formation_env.sim.step import CHUNK_MIN
+    from formation_env.wake.across import LANES, chunk_pays
+
+    rnd = Randomisation(initial_offset_m=2.0, slot_offset_b=0.1, steady_wind_mps=3.0, turbulence_sigma_mps=1.0)
+    cfg = EnvConfig(scenario=scenario, action_mode=mode, randomisation=rnd, compute_benefit=benefit)
+    n = LANES + 3
+    batch = Simulation(cfg, batch_size=n)
+    assert chunk_pays(batch.params.wake.lattice) and 3 < CHUNK_MIN <= LANES  # both paths are flown
+    seeds = list(range(10, 10 + n))
+    singles = [Simulation(cfg) for _ in seeds]
+    batch.reset(seeds=seeds)
+    for one, seed in zip(singles, seeds):
+        one.reset(seeds=[seed])
+    actions = np.random.default_rng(1).uniform(-1, 1, (12, n, batch.n_agents, 4))
+    for k in range(12):
+        out = batch.step(actions[k])
+        for i, one in enumerate(singles):
+            o1 = one.step(actions[k, i:i + 1])
+            np.testing.assert_array_equal(out.observation[i], o1.observation[0], err_msg=f"{k} {i}")
+            np.testing.assert_array_equal(out.reward[i], o1.reward[0], err_msg=f"{k} {i}")
+            if benefit:
+                assert np.any(one.output.saving[0] != 0.0)
+                np.testing.assert_array_equal(batch.output.saving[i], one.output.saving[0], err_msg=f"{k} {i}")
+    for i, one in enumerate(singles):
+        np.testing.assert_array_equal(batch.aircraft[i], one.aircraft[0])
+        np.testing.assert_array_equal(batch.state.circulation[i], one.state.circulation[0])
+
+
+def test_which_lattices_solve_in_chunks():
+    """Two or three Aerosondes with the field read off the solve; not five (its chunk outgrows a core's cache), nor
+    a field evaluated at other points than the control points."""
+    from formation_env.geometry import aerosonde
+    from formation_env.wake import WakeModel
+    from formation_env.wake.across import MAX_PANELS, chunk_pays
+    from formation_env.wake.arrays import wake_arrays
+
+    def pays(n, **kw):
+        return chunk_pays(wake_arrays(WakeModel([aerosonde()] * n, **kw), np.zeros(3)).lattice)
+
+    assert pays(2) and pays(3) and not pays(5)
+    assert 3 * 10 <= MAX_PANELS < 5 * 10
+    assert not pays(2, eval_points="quarter_chord")

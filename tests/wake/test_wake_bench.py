@@ -52,4 +52,18 @@ def test_benchmark_reports_gflops_from_the_count(monkeypatch):
     res = bench.run_benchmarks(quick=True)
     total = res["flops_per_evaluation"]["total"]
     assert res["gflops_single"] == pytest.approx(total / 1e-3 / 1e9)
-    assert res["batched"]["1024"]["gflops"] == pytest.approx(total * 1024 / 1e-3 / 1e9)
+    rows = res["batched"]["1024"].values()
+    assert {r["kernel"] for r in rows} == {"per_formation", "across_lanes"} and 1 in {r["threads"] for r in rows}
+    for r in rows:
+        assert r["gflops"] == pytest.approx(total * 1024 / 1e-3 / 1e9)
+        assert r["gflops_per_core"] == pytest.approx(r["gflops"] / r["threads"])
+
+
+def test_the_peak_is_derived_from_the_clock_and_the_vector_width(monkeypatch):
+    import io
+
+    cpuinfo = "processor\t: 0\ncpu MHz\t\t: 2500.000\nflags\t\t: fpu sse2 avx avx2 fma\n"
+    monkeypatch.setattr("builtins.open", lambda *a, **k: io.StringIO(cpuinfo))
+    peak = bench.peak_gflops_per_core()
+    assert peak["gflops"] == pytest.approx(2 * 4 * 2 * 2.5)  # AVX2: 4 float64 lanes
+    assert "AVX2" in peak["derivation"] and "2.50 GHz" in peak["derivation"]
