@@ -396,7 +396,7 @@ def _own_row(s, aic, aic_static, j, p0, k0, npan):
         q = np.uint64(k0 + i) * _U_STRIDE
         a = aic_static[j, p0 + i]
         row = aic[j, p0 + i]
-        for l in range(np.uint64(LANES)):
+        for l in range(np.uint64(row.shape[0])):  # LANES, as a run-time count: note in lu_solve_lanes
             row[l] = a - s[q + LW + l] + s[q + _U_STRIDE + LW + l]
 
 
@@ -409,7 +409,7 @@ def _other_row(s, pt, aic, vcross, j, p0, k0, npan):
         qn = q + _U_STRIDE
         row = aic[j, p0 + i]
         vc = vcross[j, p0 + i]
-        for l in range(np.uint64(LANES)):
+        for l in range(np.uint64(row.shape[0])):  # LANES, as a run-time count: note in lu_solve_lanes
             bx, by, bz = s[q + BX + l], s[q + BY + l], s[q + BZ + l]
             row[l] = ((s[q + CW + l] - s[q + LW + l]) + bx * pt[N0 + l] + by * pt[N1 + l] + bz * pt[N2 + l]
                       - (s[qn + CW + l] - s[qn + LW + l]))
@@ -424,25 +424,29 @@ def lu_solve_lanes(a, rhs, piv):
     (N, LANES) overwritten, the solutions in ``rhs``; ``piv`` (LANES,) int64 scratch. Each lane chooses its own
     pivots (partial pivoting, the first largest magnitude), swaps its own rows and performs the scalar
     elimination's operations in the same order (a row whose multiplier is 0 left as it is, a zero pivot
-    replaced by 1e-300), so every lane's solution is the scalar solve's bit for bit."""
+    replaced by 1e-300), so every lane's solution is the scalar solve's bit for bit.
+
+    The lane loops run to a run-time count (``a.shape[2]``, LANES) rather than the constant: LLVM unrolls a loop of
+    a constant 16 and then cannot prove that a row it writes does not overlap another it reads (they lie a
+    run-time distance apart in one array), so it keeps the unrolled loop scalar; a loop of a run-time count goes to
+    the loop vectoriser, which checks the overlap once per loop and runs the vector body (the same operations per
+    element: the results are the same bits)."""
     n = a.shape[0]
-    best = np.empty(LANES)
-    m = np.empty(LANES)
-    s = np.empty(LANES)
+    lanes = a.shape[2]
+    best = np.empty(lanes)
+    m = np.empty(lanes)
+    s = np.empty(lanes)
     for k in range(n):
-        ak = a[k, k]
-        for l in range(LANES):
+        for l in range(lanes):
             piv[l] = k
-        for l in range(LANES):
-            best[l] = abs(ak[l])
+            best[l] = abs(a[k, k, l])
         for i in range(k + 1, n):
-            ai = a[i, k]
-            for l in range(LANES):
-                v = abs(ai[l])
+            for l in range(lanes):
+                v = abs(a[i, k, l])
                 if v > best[l]:
                     best[l] = v
                     piv[l] = i
-        for l in range(LANES):
+        for l in range(lanes):
             p = piv[l]
             if p != k:
                 for j in range(n):
@@ -452,37 +456,27 @@ def lu_solve_lanes(a, rhs, piv):
                 tmp = rhs[k, l]
                 rhs[k, l] = rhs[p, l]
                 rhs[p, l] = tmp
-        d = a[k, k]
-        for l in range(LANES):
-            if d[l] == 0.0:
-                d[l] = 1e-300
-        rk = rhs[k]
+        for l in range(lanes):
+            if a[k, k, l] == 0.0:
+                a[k, k, l] = 1e-300
         for i in range(k + 1, n):
-            ai = a[i]
-            for l in range(LANES):
-                m[l] = ai[k, l] / d[l]
+            for l in range(lanes):
+                m[l] = a[i, k, l] / a[k, k, l]
             for j in range(k + 1, n):
-                aij = ai[j]
-                akj = a[k, j]
-                for l in range(LANES):
-                    x = aij[l] - m[l] * akj[l]
-                    aij[l] = x if m[l] != 0.0 else aij[l]
-            ri = rhs[i]
-            for l in range(LANES):
-                x = ri[l] - m[l] * rk[l]
-                ri[l] = x if m[l] != 0.0 else ri[l]
+                for l in range(lanes):
+                    x = a[i, j, l] - m[l] * a[k, j, l]
+                    a[i, j, l] = x if m[l] != 0.0 else a[i, j, l]
+            for l in range(lanes):
+                x = rhs[i, l] - m[l] * rhs[k, l]
+                rhs[i, l] = x if m[l] != 0.0 else rhs[i, l]
     for k in range(n - 1, -1, -1):
-        rk = rhs[k]
-        for l in range(LANES):
-            s[l] = rk[l]
+        for l in range(lanes):
+            s[l] = rhs[k, l]
         for j in range(k + 1, n):
-            akj = a[k, j]
-            rj = rhs[j]
-            for l in range(LANES):
-                s[l] -= akj[l] * rj[l]
-        d = a[k, k]
-        for l in range(LANES):
-            rk[l] = s[l] / d[l]
+            for l in range(lanes):
+                s[l] -= a[k, j, l] * rhs[j, l]
+        for l in range(lanes):
+            rhs[k, l] = s[l] / a[k, k, l]
 
 
 @_jit
@@ -491,12 +485,13 @@ def _field_from_solve(pv, g, vcross, b0, nl, vpts_out):
     horseshoe vectors and circulations ``g`` (N, LANES), summed in panel order as
     :func:`formation_env.wake.kernels.evaluate_one` sums them."""
     n_panels = pv.shape[0]
-    wx = np.empty(LANES)
-    wy = np.empty(LANES)
-    wz = np.empty(LANES)
+    lanes = g.shape[1]  # LANES, as a run-time count: note in lu_solve_lanes
+    wx = np.empty(lanes)
+    wy = np.empty(lanes)
+    wz = np.empty(lanes)
     for j in range(n_panels):
         v = pv[j]
-        for l in range(LANES):
+        for l in range(lanes):
             wx[l] = 0.0
             wy[l] = 0.0
             wz[l] = 0.0
@@ -504,7 +499,7 @@ def _field_from_solve(pv, g, vcross, b0, nl, vpts_out):
             if pv[p] != v:
                 gp = g[p]
                 vc = vcross[j, p]
-                for l in range(LANES):
+                for l in range(lanes):
                     wx[l] += gp[l] * vc[0, l]
                     wy[l] += gp[l] * vc[1, l]
                     wz[l] += gp[l] * vc[2, l]
