@@ -89,6 +89,9 @@ def print_human(results: dict) -> None:
         print(f"  single evaluation      {w['single_evaluation_us']:9.1f} us   (thesis: {w['thesis_s'] * 1e3:.0f} ms;"
               f" {w['speedup_vs_thesis']:.0f}x faster)")
         print(f"  single incl. meshing   {w['single_with_meshing_us']:9.1f} us")
+        if any("kernel" in r for rows in w["batched"].values() for r in rows.values()):
+            print("  (per formation: WakeModel.evaluate's kernel; across lanes: the decision step's, 16 formations "
+                  "a vector, formation_env.wake.across)")
         for b, rows in w["batched"].items():
             for r in rows.values():
                 print(f"  batch {int(b):5d}, {r['kernel'].replace('_', ' '):13s}, {r['threads']} thread"
