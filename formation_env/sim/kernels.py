@@ -180,7 +180,7 @@ def step_one(state, controls, ambient, turb, turb_omega, held_wind, held_omega, 
     envelope gets no wake solve and zero induced wind (its episode is ending). ``keep``: the solve's AIC and
     right-hand side before elimination (:func:`formation_env.wake.aic.assemble_and_solve`; None or empty: not kept).
     The decision step runs the same stages with the solve of a chunk of formations at once
-    (:func:`formation_env.sim.stages.physics_before_wake`)."""
+    (:func:`formation_env.sim.physics.physics_before_wake`)."""
     nv = state.shape[0]
     act = wake_action(state, ambient, turb, held_wind, held_omega, update_wake, wake_on, aircraft)
     if act == WAKE_SOLVE:

@@ -43,10 +43,11 @@ from .dispatch import PARALLEL_MIN_BATCH, EntryPoints, run_chunks
 from .params import TURBULENCE_OFF, StepParams
 from ..wake.across import LANES, chunk_pays
 from .kernels import WAKE_HOLD
+from .physics import ell_chunk, physics_after_wake, physics_before_wake, solve_chunk
 from .stages import (advance_turbulence, ambient_wind, control, crash_and_slot_error, decision_over, decision_scratch,
-                     demands, ell_chunk, episode_flags, field_scratch, formation_benefit, formation_saving,
-                     integrate_reference, nearest_separations, observe_one, physics_after_wake, physics_before_wake,
-                     reward_output, sample_turbulence, slot_frame_angle, solve_chunk, step_separation_check)
+                     demands, episode_flags, field_scratch, formation_benefit, formation_saving,
+                     integrate_reference, nearest_separations, observe_one, reward_output, sample_turbulence,
+                     slot_frame_angle, step_separation_check)
 from .stages import setpoint_shift as _setpoint_shift  # noqa: F401  (tests/envs reads it here)
 from .state import SimState, StepOutput
 from .views import struct_view
@@ -80,12 +81,12 @@ CHUNK_MIN = LANES // 2 + 1
 @_jit_inline
 def decide_chunk(p, s, b0, nl, actions, o, ell):
     """One decision of formations b0..b0+nl-1 (nl <= LANES) with ``actions`` (B, V, 4): each formation's substeps,
-    where nl >= :data:`CHUNK_MIN` the ELL of the chunk's formations solved together
-    (:func:`formation_env.sim.stages.solve_chunk`; ``ell`` an :class:`~formation_env.sim.stages.EllChunk` of LANES
-    lanes), else each formation's on its own (:func:`formation_env.sim.stages.physics_and_events`); then each
-    formation's observation, reward and events into ``o`` (the stages: :mod:`formation_env.sim.stages`). Every
-    formation's numbers are those of its own decision alone, either way: the chunk shares the solve's
-    instructions, not its values.
+    their physics steps a chunk at a time (:mod:`formation_env.sim.physics`; ``ell`` an
+    :class:`~formation_env.sim.physics.EllChunk`): where nl >= :data:`CHUNK_MIN` and ``ell`` has a chunk scratch
+    the ELL of the chunk's formations solved together, else each formation's on its own; then each formation's
+    observation, reward and events into ``o`` (the stages: :mod:`formation_env.sim.stages`). Every formation's
+    numbers are those of its own decision alone, either way: the chunk shares the solve's instructions, not its
+    values.
 
     Collision: the smallest CG separation over the decision's physics steps below the collision
     separation (a step that also made a state non-finite is judged from its pre-step positions and

@@ -13,8 +13,8 @@ from . import lanes
 from .lanes import KMAX
 from .posing import bound_length, branch_directions, to_ned
 
-__all__ = ["lu_solve_inplace", "static_aic", "assemble_and_solve", "assemble_and_solve_scalar", "assemble_scalar",
-           "assemble_lanes"]
+__all__ = ["lu_solve_inplace", "lu_solve_lanes", "static_aic", "assemble_and_solve", "assemble_and_solve_scalar",
+           "assemble_scalar", "assemble_lanes"]
 
 _jit = nb.njit(cache=True, fastmath=False, error_model="numpy")
 
@@ -304,3 +304,63 @@ def assemble_lanes(lat, posed, aic, gamma, vcross, sheet=None):
             lanes.fix_bounds(s, k0, k0 + npan, px, py, pz, x1, bound_dir, cutoff, overlap_core)
             lanes.other_panel_row(s, aic, vcross, j, p0, k0, npan, n0, n1, n2, store)
         gamma[j] = vel[vj, 0] * n0 + vel[vj, 1] * n1 + vel[vj, 2] * n2
+
+
+@_jit
+def lu_solve_lanes(a, rhs, piv):
+    """:func:`lu_solve_inplace` of L systems at once, one per vector lane (the ELL of a chunk of formations,
+    :mod:`.across`): ``a`` (N, N, L) and ``rhs`` (N, L) overwritten, the solutions in ``rhs``; ``piv`` (L,) int64
+    scratch. Each lane chooses its own pivots (partial pivoting, the first largest magnitude), swaps its own rows and
+    performs the scalar elimination's operations in the same order (a row whose multiplier is 0 left as it is, a
+    zero pivot replaced by 1e-300), so every lane's solution is the scalar solve's bit for bit.
+
+    The lane loops run to a run-time count (``a.shape[2]``), not a constant: LLVM unrolls a loop of a constant 16 and
+    then cannot prove that a row it writes does not overlap another it reads (they lie a run-time distance apart in
+    one array), so it keeps the unrolled loop scalar; a loop of a run-time count goes to the loop vectoriser, which
+    checks the overlap once per loop and runs the vector body (the same operations per element: the same bits)."""
+    n = a.shape[0]
+    lanes = a.shape[2]
+    best = np.empty(lanes)
+    m = np.empty(lanes)
+    s = np.empty(lanes)
+    for k in range(n):
+        for l in range(lanes):
+            piv[l] = k
+            best[l] = abs(a[k, k, l])
+        for i in range(k + 1, n):
+            for l in range(lanes):
+                v = abs(a[i, k, l])
+                if v > best[l]:
+                    best[l] = v
+                    piv[l] = i
+        for l in range(lanes):
+            p = piv[l]
+            if p != k:
+                for j in range(n):
+                    tmp = a[k, j, l]
+                    a[k, j, l] = a[p, j, l]
+                    a[p, j, l] = tmp
+                tmp = rhs[k, l]
+                rhs[k, l] = rhs[p, l]
+                rhs[p, l] = tmp
+        for l in range(lanes):
+            if a[k, k, l] == 0.0:
+                a[k, k, l] = 1e-300
+        for i in range(k + 1, n):
+            for l in range(lanes):
+                m[l] = a[i, k, l] / a[k, k, l]
+            for j in range(k + 1, n):
+                for l in range(lanes):
+                    x = a[i, j, l] - m[l] * a[k, j, l]
+                    a[i, j, l] = x if m[l] != 0.0 else a[i, j, l]
+            for l in range(lanes):
+                x = rhs[i, l] - m[l] * rhs[k, l]
+                rhs[i, l] = x if m[l] != 0.0 else rhs[i, l]
+    for k in range(n - 1, -1, -1):
+        for l in range(lanes):
+            s[l] = rhs[k, l]
+        for j in range(k + 1, n):
+            for l in range(lanes):
+                s[l] -= a[k, j, l] * rhs[j, l]
+        for l in range(lanes):
+            rhs[k, l] = s[l] / a[k, k, l]

@@ -16,9 +16,8 @@ import pytest
 
 from formation_env.geometry import aerosonde
 from formation_env.wake import WakeModel
-from formation_env.wake.across import (LANES, chunk_scratch, evaluate_batch_lanes_serial, evaluate_chunk, lanes_apply,
-                                       lu_solve_lanes)
-from formation_env.wake.aic import lu_solve_inplace
+from formation_env.wake.across import LANES, chunk_scratch, evaluate_batch_lanes_serial, evaluate_chunk, lanes_apply
+from formation_env.wake.aic import lu_solve_inplace, lu_solve_lanes
 from formation_env.wake.arrays import wake_arrays
 from formation_env.wake.kernels import SHEET_ON, evaluate_batch_serial, evaluate_one
 
