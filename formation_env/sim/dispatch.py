@@ -5,8 +5,9 @@ independent, so serial, threaded, packed, direct and numba's own dispatcher give
 * :func:`run_chunks` runs ``kernel(*args, start, stop)`` over formations 0..n-1, serially or on the calling
   thread plus ``numba.get_num_threads() - 1`` pool workers (``NUMBA_NUM_THREADS`` applies) taking chunks of
   formations (whole multiples of the ELL's lanes, :data:`formation_env.wake.across.LANES`, once a batch has two
-  such chunks a thread) from a shared counter (:func:`run_parallel`). The kernels release the GIL. A queue rather
-  than numba's ``prange``: ``prange`` cannot take the step's named structs of arrays, and its OpenMP barrier waits
+  such chunks a thread) from a shared counter (:func:`formation_env.threads.run_parallel`). The kernels release
+  the GIL. A queue rather than numba's ``prange``: ``prange`` cannot take the step's named structs of arrays, and
+  its OpenMP barrier waits
   for the slowest thread, which collapsed under a busy core; with a queue, a thread on a busy core simply takes
   fewer chunks.
 * :class:`ThreadTuner` chooses serial or threaded per (kernel, batch size) by measuring both, so a busy
@@ -19,10 +20,8 @@ independent, so serial, threaded, packed, direct and numba's own dispatcher give
 
 from __future__ import annotations
 
-import itertools
 import math
 import time
-from concurrent.futures import ThreadPoolExecutor
 
 import numba as nb
 import numpy as np
@@ -30,6 +29,7 @@ from numba.core import types as nbt
 from numba.experimental import structref
 from numba.extending import overload
 
+from ..threads import run_parallel, threads
 from ..wake.across import LANES
 from .views import struct_view, view_type
 
@@ -37,44 +37,6 @@ __all__ = ["PARALLEL_MIN_BATCH", "threads", "run_parallel", "ThreadTuner", "run_
            "pack_structs", "EntryPoints"]
 
 PARALLEL_MIN_BATCH = 2  # a single formation runs serially (no thread start-up)
-
-_POOL: ThreadPoolExecutor | None = None
-_POOL_SIZE = 0
-
-
-def threads() -> int:
-    """The threads a batch may use: numba's thread count (``NUMBA_NUM_THREADS``), at least 1."""
-    return max(1, int(nb.get_num_threads()))
-
-
-def run_parallel(kernel, n: int, args: tuple | list, n_threads: int) -> None:
-    """``kernel(*args, start, stop)`` over 0..n in chunks, on the calling thread plus ``n_threads - 1``
-    pool workers taking chunks (about four per thread) from a shared counter. ``args``: one tuple for every
-    thread, or a list of at least ``n_threads`` tuples, thread i taking ``args[i]`` (the calling thread 0)."""
-    global _POOL, _POOL_SIZE
-    if _POOL is None or _POOL_SIZE != n_threads - 1:
-        if _POOL is not None:
-            _POOL.shutdown(wait=False)
-        _POOL, _POOL_SIZE = ThreadPoolExecutor(n_threads - 1, thread_name_prefix="formation-step"), n_threads - 1
-    chunk = max(1, -(-n // (4 * n_threads)))
-    if n >= 2 * LANES * n_threads:  # whole chunks of the decision's ELL lanes (formation_env.wake.across), two a thread
-        chunk = -(-chunk // LANES) * LANES
-    n_chunks = -(-n // chunk)
-    counter = itertools.count()  # next() is atomic under the GIL
-
-    def work(i):
-        a = args[i] if isinstance(args, list) else args
-        while True:
-            c = next(counter)
-            if c >= n_chunks:
-                return
-            kernel(*a, c * chunk, min((c + 1) * chunk, n))
-
-    futures = [_POOL.submit(work, i) for i in range(1, n_threads)]
-    work(0)
-    for f in futures:
-        f.result()
-
 
 class ThreadTuner:
     """Serial or threaded, whichever is measured faster for this kernel and batch size.
@@ -125,7 +87,7 @@ class ThreadTuner:
                 use_threads, exploring = not use_threads, True
         t0 = time.perf_counter()
         if use_threads:
-            run_parallel(kernel, n, args, n_threads)
+            run_parallel(kernel, n, args, n_threads, granule=LANES)  # whole chunks of the decision's ELL lanes
         else:
             kernel(*serial_args, 0, n)
         dt = time.perf_counter() - t0

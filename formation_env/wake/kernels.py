@@ -34,7 +34,7 @@ from .field import field_velocity, field_velocity_batch
 from .posing import bound_length, branch_directions, dcm_ned_to_body_1, place_lattice, posed_lattice, to_ned
 from .structs import LatticeArrays
 
-__all__ = ["evaluate_one", "effective_wind", "evaluate_batch_serial", "evaluate_batch_parallel", "field_velocity_batch",
+__all__ = ["evaluate_one", "effective_wind", "evaluate_batch_range", "evaluate_batch_serial", "field_velocity_batch",
            "field_velocity", "assemble_and_solve", "static_aic", "lu_solve_inplace", "posed_lattice", "place_lattice",
            "dcm_ned_to_body_1", "to_ned", "branch_directions", "point_to_knots", "branch", "branch_cored", "leg",
            "core_radius", "CORE_PEAK", "OVERLAP_CORE_CHORD_FRACTION", "default_overlap_core",
@@ -180,21 +180,22 @@ def effective_wind(rot, vpts, grad_w, vehicle_panel_start, wind_ned_out, wind_b_
             omega_ned_out[v, i] = rot[v, 0, i] * omega_b_out[v, 0] + rot[v, 1, i] * omega_b_out[v, 1] + rot[v, 2, i] * omega_b_out[v, 2]
 
 
-def _make_batch(parallel: bool):
-    @nb.njit(cache=True, parallel=parallel, error_model="numpy")
-    def evaluate_batch(lattice, pos, euler, airspeed, alpha, beta, gamma_out, vpts_out, wind_ned_out, wind_b_out,
-                       omega_b_out, omega_ned_out, sheet=None):
-        """:func:`evaluate_one` of B formations (poses, air data and outputs with the batch axis first) of the
-        lattice ``lattice``: a :class:`~formation_env.wake.structs.LatticeArrays` or the plain tuple of its fields
-        (what :meth:`formation_env.wake.WakeModel.evaluate` passes: numba types a plain tuple argument in C, a
-        named tuple through Python)."""
-        lat = LatticeArrays(*lattice)
-        for b in nb.prange(pos.shape[0]):
-            evaluate_one(lat, pos[b], euler[b], airspeed[b], alpha[b], beta[b], gamma_out[b], vpts_out[b],
-                         wind_ned_out[b], wind_b_out[b], omega_b_out[b], omega_ned_out[b], sheet)
-
-    return evaluate_batch
+@nb.njit(cache=True, nogil=True, error_model="numpy")
+def evaluate_batch_range(lattice, pos, euler, airspeed, alpha, beta, gamma_out, vpts_out, wind_ned_out, wind_b_out,
+                         omega_b_out, omega_ned_out, sheet, start, stop):
+    """:func:`evaluate_one` of formations start..stop-1 of a batch (poses, air data and outputs with the batch axis
+    first) of the lattice ``lattice``: a :class:`~formation_env.wake.structs.LatticeArrays` or the plain tuple of its
+    fields (what :meth:`formation_env.wake.WakeModel.evaluate` passes: numba types a plain tuple argument in C, a
+    named tuple through Python). Releases the GIL: threads run ranges of one batch
+    (:func:`formation_env.threads.run_parallel`)."""
+    lat = LatticeArrays(*lattice)
+    for b in range(start, stop):
+        evaluate_one(lat, pos[b], euler[b], airspeed[b], alpha[b], beta[b], gamma_out[b], vpts_out[b],
+                     wind_ned_out[b], wind_b_out[b], omega_b_out[b], omega_ned_out[b], sheet)
 
 
-evaluate_batch_serial = _make_batch(False)
-evaluate_batch_parallel = _make_batch(True)
+def evaluate_batch_serial(lattice, pos, euler, airspeed, alpha, beta, gamma_out, vpts_out, wind_ned_out, wind_b_out,
+                          omega_b_out, omega_ned_out, sheet=None):
+    """:func:`evaluate_batch_range` of the whole batch, on the calling thread."""
+    evaluate_batch_range(lattice, pos, euler, airspeed, alpha, beta, gamma_out, vpts_out, wind_ned_out, wind_b_out,
+                         omega_b_out, omega_ned_out, sheet, 0, pos.shape[0])

@@ -17,6 +17,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..geometry import Vehicle
+from ..threads import run_parallel, threads
 from . import kernels
 from .arrays import lattice_arrays
 from .biot_savart import SHEET_OFF, SHEET_ON
@@ -206,9 +207,13 @@ class WakeModel:
         gamma = np.empty((b, n))
         vpts = np.empty((b, n, 3))
         out = [np.empty((b, v, 3)) for _ in range(4)]
-        kernel = kernels.evaluate_batch_parallel if b >= _PARALLEL_MIN_BATCH else kernels.evaluate_batch_serial
-        kernel(self._lattice, state.position_ned, state.euler_rad, state.airspeed_mps, state.alpha_rad, state.beta_rad,
-               gamma, vpts, *out, SHEET_ON if self.sheet else SHEET_OFF)
+        args = (self._lattice, state.position_ned, state.euler_rad, state.airspeed_mps, state.alpha_rad,
+                state.beta_rad, gamma, vpts, *out, SHEET_ON if self.sheet else SHEET_OFF)
+        n_threads = threads()
+        if b >= _PARALLEL_MIN_BATCH and n_threads > 1:
+            run_parallel(kernels.evaluate_batch_range, b, args, min(n_threads, b))
+        else:
+            kernels.evaluate_batch_range(*args, 0, b)
         return WakeSolution(gamma, vpts, *out)
 
     def induced_velocity(

@@ -125,3 +125,24 @@ def test_the_elimination_across_lanes_equals_the_scalar_one_lane_by_lane():
         lu_solve_inplace(m, r)
         assert np.array_equal(_bits(got_r[:, lane]), _bits(r)), lane
         assert np.array_equal(_bits(got_a[:, :, lane]), _bits(m)), lane
+
+
+def test_a_threaded_batch_equals_each_formation_solved_alone_bit_for_bit():
+    """WakeModel.evaluate spreads a batch of 16 or more over threads (formation_env.threads.run_parallel: the
+    serial kernel on ranges of the batch); every formation's numbers are its own solve's."""
+    import numba
+
+    model = _model(2, True, True, True, True)
+    state = _batch(np.random.default_rng(11), 40, 2)
+    n = numba.get_num_threads()
+    numba.set_num_threads(min(2, numba.config.NUMBA_NUM_THREADS))
+    try:
+        from formation_env.wake import FormationState
+
+        got = model.evaluate(FormationState(*state))
+    finally:
+        numba.set_num_threads(n)
+    want = _solve(evaluate_batch_serial, model, state)
+    for g, e in zip((got.circulation, got.point_velocity_ned, got.wind_ned, got.wind_body, got.omega_body,
+                     got.omega_ned), want):
+        assert np.array_equal(_bits(g), _bits(e))
