@@ -33,7 +33,7 @@ from .across_rows import (LANES, N_ROWS, _N_HEAD, _STRIDE, X1X, X1Y, X1Z, X3X, X
                           _fix_llines, _other_bounds, _fix_bounds, _own_row, _other_row)
 from .aic import lu_solve_lanes
 from .biot_savart import STRIP_OK, STRIP_W, sheet_on, strip_frames
-from .kernels import effective_wind
+from .kernels import _same_points, effective_wind
 from .field import field_velocity
 from .posing import bound_length, branch_directions, place_lattice, to_ned
 from .structs import LatticeArrays, PosedLattice
@@ -98,16 +98,7 @@ def lanes_apply(lat):
     """Whether a lattice takes the chunked kernel: its field is read off the solve (evaluation at the control
     points, the field's viscous core that of the solve), as :func:`formation_env.wake.kernels.evaluate_one`
     decides it."""
-    if lat.aic_core_mode != lat.core_mode:
-        return False
-    a, b = lat.eval_b, lat.control_b
-    if a.shape[0] != b.shape[0]:
-        return False
-    for j in range(a.shape[0]):
-        for i in range(3):
-            if a[j, i] != b[j, i]:
-                return False
-    return True
+    return lat.aic_core_mode == lat.core_mode and _same_points(lat.eval_b, lat.control_b)
 
 
 @_jit
