@@ -14,14 +14,16 @@ import numba as nb
 import numpy as np
 
 from ..wake.across import LANES, ChunkScratch, chunk_scratch, field_chunk, solve_chunk_lanes
+from ..wake.across_loads import induced_drags_chunk
 from ..wake.arrays import evaluate_formation
+from ..wake.benefit import AIR_DENSITY_SL
 from ..wake.biot_savart import sheet_on
 from ..wake.coupling import couple_solved
 from .kernels import (WAKE_CLEAR, WAKE_SOLVE, clear_if_not_finite, clear_wake, ell_inputs, integrate_one,
                       wake_action)
 from .views import struct_view
 
-__all__ = ["EllChunk", "ell_chunk", "physics_before_wake", "solve_chunk", "physics_after_wake"]
+__all__ = ["EllChunk", "ell_chunk", "physics_before_wake", "solve_chunk", "physics_after_wake", "drags_chunk"]
 
 _jit = nb.njit(cache=True, error_model="numpy")
 # inlined into the decision at numba IR level (formation_env.sim.stages says why)
@@ -49,6 +51,8 @@ class EllChunk(NamedTuple):
     keep: np.ndarray  # (LANES, N, N + 1) the AIC and right-hand side before elimination (benefit on), else (0, N, N + 1)
     no_keep: np.ndarray  # (0, N, N + 1): the substeps whose AIC nothing reads
     no_keep_one: np.ndarray  # (0, N + 1): the same for one lane
+    drag_formation: np.ndarray  # (LANES, V) induced drag in formation, N (benefit on, chunked)
+    drag_alone: np.ndarray  # (LANES, V) induced drag alone, N
 
 
 @_jit
@@ -67,7 +71,8 @@ def ell_chunk(p, s, chunked):
         speed=np.ones((LANES, nv)), alpha=np.zeros((LANES, nv)), beta=np.zeros((LANES, nv)),
         gamma=np.empty((LANES, n)), vpts=np.empty((LANES, n, 3)), wind_ned=np.empty((LANES, nv, 3)),
         wind_b=np.empty((LANES, nv, 3)), omega_b=np.empty((LANES, nv, 3)), omega_ned=np.empty((LANES, nv, 3)),
-        keep=np.empty((n_kept, n, n + 1)), no_keep=np.empty((0, n, n + 1)), no_keep_one=np.empty((0, n + 1))))
+        keep=np.empty((n_kept, n, n + 1)), no_keep=np.empty((0, n, n + 1)), no_keep_one=np.empty((0, n + 1)),
+        drag_formation=np.zeros((LANES, nv)), drag_alone=np.zeros((LANES, nv))))
 
 
 @_jit_inline
@@ -170,3 +175,24 @@ def physics_after_wake(p, s, b, last_substep, sc, ell, l):
         s.status[b, a] = status[a]
         status_any[a] |= status[a]
     return solved
+
+
+@_jit_inline
+def drags_chunk(p, s, b0, nl, solved_last, ell):
+    """After the last substep of a chunk solved across lanes with the benefit on: the induced drags in formation and
+    alone of the lanes whose last substep's solve the benefit reads (``solved_last`` (nl,)) into
+    ``ell.drag_formation`` and ``ell.drag_alone``, all lanes at once
+    (:func:`formation_env.wake.across_loads.induced_drags_chunk`, off the chunk's poses and kept AIC, each
+    formation's circulation as coupled: ``s.circulation``); the other lanes' are computed, never read. Bit for bit
+    :func:`formation_env.wake.benefit.induced_drags_one` of each formation, as :func:`.stages.formation_saving` takes
+    it otherwise."""
+    any_solved = False
+    for l in range(nl):
+        if solved_last[l]:
+            any_solved = True
+            for k in range(ell.gamma.shape[1]):
+                ell.gamma[l, k] = s.circulation[b0 + l, k]
+    if not any_solved:
+        return
+    induced_drags_chunk(p.wake, p.wake_alone.lattice.panel_vehicle.shape[0], ell.c, ell.speed, ell.alpha, ell.beta,
+                        ell.gamma, ell.keep, AIR_DENSITY_SL, ell.drag_formation, ell.drag_alone)

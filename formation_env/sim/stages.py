@@ -32,7 +32,7 @@ from ..atmosphere.spectral_field_kernels import sample_modes_one
 from ..control.law import N_CSTATE, fcs_update
 from ..frames import quaternion_dcm_terms, track_to_ned_xy
 from ..wake.arrays import evaluate_formation
-from ..wake.benefit import AIR_DENSITY_SL, induced_drag_saving_one
+from ..wake.benefit import AIR_DENSITY_SL, induced_drag_saving_one, saving_from_drags
 from .guidance import formation_demands, gust_wind_ned, leader_wind, reference_path, schedule_features
 from .kernels import ell_inputs, min_separation_each, position_finite, separation_each_known, step_separation
 from .observe import box_depth_each, observe_formation, reward_formation, slot_error
@@ -408,13 +408,17 @@ def formation_benefit(p, s, b, amb, out_saving):
 
 
 @_jit_inline
-def formation_saving(p, s, b, crashed_any, solved_last, sc, o):
+def formation_saving(p, s, b, crashed_any, solved_last, chunk_drags, d_form, d_alone, sc, o):
     """``o.saving[b]`` with the benefit on: 0 after a crash, read off the last substep's ELL solve
-    (its poses and circulation) when there was one, else a fresh solve (:func:`formation_benefit`)."""
+    (its poses and circulation) when there was one, else a fresh solve (:func:`formation_benefit`).
+    ``chunk_drags``: that solve's induced drags ``d_form`` and ``d_alone`` (V,) are already taken across the lanes
+    of its chunk (:func:`formation_env.sim.physics.drags_chunk`, the same bits)."""
     if p.benefit_on:
         if crashed_any:
             for a in range(sc.known.shape[0]):
                 o.saving[b, a] = 0.0
+        elif solved_last and chunk_drags:
+            saving_from_drags(p.wake, sc.ell_pos, sc.ell_euler, d_form, d_alone, o.saving[b])
         elif solved_last:
             # the isolated circulations from the diagonal blocks of that solve's AIC (kept by solve_chunk)
             induced_drag_saving_one(p.wake, p.wake_alone, sc.ell_pos, sc.ell_euler, sc.ell_speed, sc.ell_alpha,

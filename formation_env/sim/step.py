@@ -43,7 +43,7 @@ from .dispatch import PARALLEL_MIN_BATCH, EntryPoints, run_chunks
 from .params import TURBULENCE_OFF, StepParams
 from ..wake.across import LANES, chunk_pays
 from .kernels import WAKE_HOLD
-from .physics import ell_chunk, physics_after_wake, physics_before_wake, solve_chunk
+from .physics import drags_chunk, ell_chunk, physics_after_wake, physics_before_wake, solve_chunk
 from .stages import (advance_turbulence, ambient_wind, control, crash_and_slot_error, decision_over, decision_scratch,
                      demands, episode_flags, field_scratch, formation_benefit, formation_saving,
                      integrate_reference, nearest_separations, observe_one, reward_output, sample_turbulence,
@@ -124,6 +124,8 @@ def decide_chunk(p, s, b0, nl, actions, o, ell):
                     min_sep[l] = d
                 if decision_over(p.reward.collision_separation_m, sc.status_any, d):
                     flying[l] = False
+    if chunked and p.benefit_on:
+        drags_chunk(p, s, b0, nl, solved_last, ell)
     for l in range(nl):
         b, sc = b0 + l, scs[l]
         # the demands at the new state: what the observation and the reward measure against
@@ -132,7 +134,8 @@ def decide_chunk(p, s, b0, nl, actions, o, ell):
         crashed_any = crash_and_slot_error(p.reward.slot_error_axes, s, b, chi_slot, sc, o)
         nearest_separations(s.aircraft[b], sc.last_pos, sc.known, o.separation_m[b])
         collided = episode_flags(p.reward.collision_separation_m, p.episode_steps, s, b, min_sep[l], crashed_any, o)
-        formation_saving(p, s, b, crashed_any, solved_last[l], sc, o)
+        formation_saving(p, s, b, crashed_any, solved_last[l], chunked, ell.drag_formation[l], ell.drag_alone[l], sc,
+                         o)
         remaining = max(p.episode_steps - s.step[b], 0) / p.substeps
         reward_output(p.reward, remaining, s, b, actions[b], chi_slot, collided, o)
         s.episode_decisions[b] += 1

@@ -34,7 +34,7 @@ from .kernels import CORE_NONE, field_velocity, posed_lattice
 from .residual import add_saving_residual
 
 __all__ = ["induced_drag_one", "isolated_induced_drag_one", "induced_drags_one", "induced_drag_saving_one",
-           "induced_drag_saving", "AIR_DENSITY_SL"]
+           "saving_from_drags", "induced_drag_saving", "AIR_DENSITY_SL"]
 
 AIR_DENSITY_SL = 1.225  # kg/m^3 (as formation_env.wake.loads.AIR_DENSITY_SL)
 
@@ -392,7 +392,15 @@ def induced_drag_saving_one(wake, wake_alone, pos, euler, speed, alpha, beta, ga
     d_alone = np.empty(nv)
     induced_drags_one(wake, wake_alone, pos, euler, speed, alpha, beta, gamma_formation, d_form, d_alone, air_density,
                       keep)
-    for v in range(nv):
+    saving_from_drags(wake, pos, euler, d_form, d_alone, out_saving)
+
+
+@_jit
+def saving_from_drags(wake, pos, euler, d_form, d_alone, out_saving):
+    """Induced-drag saving 1 - D_i(formation) / D_i(alone) (V,) into ``out_saving`` from the drags ``d_form`` and
+    ``d_alone`` (V,) of one formation at the poses ``pos``, ``euler`` (V, 3) (0 where D_i(alone) is 0), times
+    ``wake.saving_scale``, plus the residual table's correction (:func:`induced_drag_saving_one`'s last part)."""
+    for v in range(d_form.shape[0]):
         out_saving[v] = 1.0 - d_form[v] / d_alone[v] if abs(d_alone[v]) > 0.0 else 0.0
         if wake.saving_scale != 1.0:  # the span-efficiency correction (WakeModel saving_scale)
             out_saving[v] *= wake.saving_scale
