@@ -21,6 +21,10 @@ from ..frames import quaternion_dcm_terms
 from .params import AerosondeParams
 
 _jit = nb.njit(cache=True, fastmath=False, error_model="numpy")
+# the table lookups, inlined at numba IR level into their callers: _deriv reads the tables as fields of the packed
+# model and a compiled call would take and release a reference count of each table per lookup (four derivatives an
+# RK4 step, six lookups each), where inlined the reads need none
+_jit_inline = nb.njit(cache=True, fastmath=False, error_model="numpy", inline="always")
 
 # indices into the packed parameter vector
 (K_MAC, K_SPAN, K_AREA, K_VA_LO, K_VA_HI, K_BE_LO, K_BE_HI, K_AL_LO, K_AL_HI,
@@ -89,7 +93,7 @@ def pack(params: AerosondeParams, options) -> AircraftTables:
                           atm_rho=c(tab[:, 3]), atm_a=c(tab[:, 4]))
 
 
-@_jit
+@_jit_inline
 def _seg(breaks, x):
     """Segment index (end segments extrapolate) and fraction, as lookup._segment."""
     n = breaks.shape[0]
@@ -101,13 +105,13 @@ def _seg(breaks, x):
     return i, (x - breaks[i]) / (breaks[i + 1] - breaks[i])
 
 
-@_jit
+@_jit_inline
 def _interp1(breaks, values, x):
     i, f = _seg(breaks, x)
     return values[i] + f * (values[i + 1] - values[i])
 
 
-@_jit
+@_jit_inline
 def _interp2(rows, cols, table, xr, xc):
     i, fr = _seg(rows, xr)
     j, fc = _seg(cols, xc)
@@ -132,7 +136,7 @@ def _zo(x):
     return -1e-6 if x < 0.0 else 1e-6
 
 
-@_jit
+@_jit_inline
 def _atmos(alt, tT, tP, tR, tA):
     h = _clip(alt, 0.0, 86000.0) / 100.0
     if not math.isfinite(h):
