@@ -174,12 +174,11 @@ def _field_from_solve(pv, g, vcross, b0, nl, vpts_out):
             wz[l] = 0.0
         for p in range(n_panels):
             if pv[p] != v:
-                gp = g[p]
-                vc = vcross[j, p]
+                # indexed in place, no row views: a view in this loop takes and releases a reference count per pair
                 for l in range(lanes):
-                    wx[l] += gp[l] * vc[0, l]
-                    wy[l] += gp[l] * vc[1, l]
-                    wz[l] += gp[l] * vc[2, l]
+                    wx[l] += g[p, l] * vcross[j, p, 0, l]
+                    wy[l] += g[p, l] * vcross[j, p, 1, l]
+                    wz[l] += g[p, l] * vcross[j, p, 2, l]
         for l in range(nl):
             vpts_out[b0 + l, j, 0] = wx[l]
             vpts_out[b0 + l, j, 1] = wy[l]
