@@ -224,11 +224,12 @@ def aero_force_at(x, c, wind, v, tT, tP, tR, tA):
     return fx, fy, fz
 
 
-@_jit
+@_jit_inline
 def _deriv(x, c, nctrl, wind, alphadot, ac, out):
     """State derivative (15,) of one aircraft into ``out``; ``ac`` the packed model (:class:`AircraftTables`, or
-    any struct with its fields: one argument rather than twelve arrays, each of which a compiled call would
-    take and release a reference count of)."""
+    any struct with its fields: one argument rather than twelve arrays). Inlined at numba IR level into
+    :func:`rk4_batch`'s one call site: a compiled call would take and release a reference count of each array
+    argument, four derivatives an RK4 step."""
     v = ac.scalars
     u, vv, w = x[0], x[1], x[2]
     p, q, r = x[3], x[4], x[5]
@@ -333,25 +334,25 @@ def rk4_batch(state, controls, wind, dt, ac, out):
     nctrl = controls.shape[1]
     v = ac.scalars
     work = np.empty((5, 15))  # k1..k4 and the stage state
-    k1, k2, k3, k4, xs = work[0], work[1], work[2], work[3], work[4]
+    xs = work[4]
     for b in range(n):
         x = state[b]
         c = controls[b]
         wb = wind[b]
         alpha_now = air_data_kernel(x, wb, v)[1]
         alphadot = (alpha_now - x[15]) / dt if v[K_ALPHADOT] != 0.0 else 0.0
-        _deriv(x, c, nctrl, wb, alphadot, ac, k1)
+        # the four stages through one call site of the inlined _deriv (one copy of its body, not four)
+        for st in range(4):
+            for i in range(15):
+                if st == 0:
+                    xs[i] = x[i]
+                elif st == 3:
+                    xs[i] = x[i] + dt * work[2, i]
+                else:
+                    xs[i] = x[i] + (0.5 * dt) * work[st - 1, i]
+            _deriv(xs, c, nctrl, wb, alphadot, ac, work[st])
         for i in range(15):
-            xs[i] = x[i] + (0.5 * dt) * k1[i]
-        _deriv(xs, c, nctrl, wb, alphadot, ac, k2)
-        for i in range(15):
-            xs[i] = x[i] + (0.5 * dt) * k2[i]
-        _deriv(xs, c, nctrl, wb, alphadot, ac, k3)
-        for i in range(15):
-            xs[i] = x[i] + dt * k3[i]
-        _deriv(xs, c, nctrl, wb, alphadot, ac, k4)
-        for i in range(15):
-            out[b, i] = x[i] + (dt / 6.0) * (k1[i] + 2.0 * (k2[i] + k3[i]) + k4[i])
+            out[b, i] = x[i] + (dt / 6.0) * (work[0, i] + 2.0 * (work[1, i] + work[2, i]) + work[3, i])
         qn = math.sqrt(out[b, 6] ** 2 + out[b, 7] ** 2 + out[b, 8] ** 2 + out[b, 9] ** 2)
         for i in range(6, 10):
             out[b, i] = out[b, i] / qn
