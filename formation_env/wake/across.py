@@ -186,6 +186,34 @@ def _field_from_solve(pv, g, vcross, b0, nl, vpts_out):
 
 
 @_jit
+def other_vehicles_rows(lat, sheet, airspeed, b0, nl, c, vj, a, b):
+    """The knots of every vehicle but vj (its knots a..b-1) seen from the point in the head rows of the chunk
+    scratch ``c``, every lane: their core radius, L-line and bound branch rows by the field law (fast form, the
+    flagged lanes by the scalar laws); ``airspeed`` (B, V) the formations' (lane l: formation b0 + min(l, nl - 1))."""
+    s, pt = c.s, c.p
+    kv, ksk = lat.knot_vehicle, lat.surface_knot_start
+    n_knots = kv.shape[0]
+    cutoff, overlap_core = lat.cutoff_m, lat.overlap_core_m
+    ro2 = overlap_core * overlap_core if overlap_core > 0.0 else np.inf
+    sheet_law = sheet_on(sheet)
+    for srf in range(ksk.shape[0] - 1):
+        src = kv[ksk[srf]]
+        if src != vj:
+            _core_radius(s, ksk[srf], ksk[srf + 1], c, srf, src, lat, airspeed, b0, nl)
+    _other_llines(s, pt, 0, a, cutoff, ro2, sheet_law)
+    _other_llines(s, pt, b, n_knots, cutoff, ro2, sheet_law)
+    _fix_llines(s, 0, a, c, cutoff, overlap_core, sheet)
+    _fix_llines(s, b, n_knots, c, cutoff, overlap_core, sheet)
+    if a > 1:
+        _other_bounds(s, pt, 0, a - 1, ro2)
+    if n_knots - b > 1:
+        _other_bounds(s, pt, b, n_knots - 1, ro2)
+    for srf in range(ksk.shape[0] - 1):
+        if kv[ksk[srf]] != vj:
+            _fix_bounds(s, ksk[srf], ksk[srf + 1] - 1, c, cutoff, overlap_core)
+
+
+@_jit
 def solve_chunk_lanes(lat, sheet, pos, euler, airspeed, alpha, beta, b0, nl, c, gamma_out, keep):
     """The joint solve of formations b0..b0+nl-1 (nl <= LANES) of the batch: their poses into the chunk scratch
     ``c`` (a :func:`chunk_scratch`), each lane's AIC and right-hand side assembled, kept in ``keep`` (B, N, N + 1)
@@ -196,9 +224,7 @@ def solve_chunk_lanes(lat, sheet, pos, euler, airspeed, alpha, beta, b0, nl, c, 
     n_panels = pv.shape[0]
     n_knots = kv.shape[0]
     nv = pos.shape[1]
-    cutoff, overlap_core = lat.cutoff_m, lat.overlap_core_m
-    ro2 = overlap_core * overlap_core if overlap_core > 0.0 else np.inf
-    sheet_law = sheet_on(sheet)
+    cutoff = lat.cutoff_m
     _pose_chunk(lat, pos, euler, airspeed, alpha, beta, b0, nl, c, sheet)
     # each vehicle's knots (contiguous, the lattice's order)
     vk0 = np.full(nv, n_knots)
@@ -212,27 +238,15 @@ def solve_chunk_lanes(lat, sheet, pos, euler, airspeed, alpha, beta, b0, nl, c, 
         _control_point(lat, pos, b0, nl, j, c, sheet)
         a, b = vk0[vj], vk1[vj]
         _own_legs(s, pt, a, b, cutoff)
-        for srf in range(ksk.shape[0] - 1):
-            src = kv[ksk[srf]]
-            if src != vj:
-                _core_radius(s, ksk[srf], ksk[srf + 1], c, srf, src, lat, airspeed, b0, nl)
-        _other_llines(s, pt, 0, a, cutoff, ro2, sheet_law)
-        _other_llines(s, pt, b, n_knots, cutoff, ro2, sheet_law)
-        _fix_llines(s, 0, a, c, cutoff, overlap_core, sheet)
-        _fix_llines(s, b, n_knots, c, cutoff, overlap_core, sheet)
-        if a > 1:
-            _other_bounds(s, pt, 0, a - 1, ro2)
-        if n_knots - b > 1:
-            _other_bounds(s, pt, b, n_knots - 1, ro2)
+        other_vehicles_rows(lat, sheet, airspeed, b0, nl, c, vj, a, b)
         for srf in range(ksk.shape[0] - 1):
             k0 = ksk[srf]
             npan = ksk[srf + 1] - k0 - 1
             p0 = k0 - srf
             if kv[k0] == vj:
                 _own_row(s, aic, lat.aic_static, j, p0, k0, npan)
-                continue
-            _fix_bounds(s, k0, k0 + npan, c, cutoff, overlap_core)
-            _other_row(s, pt, aic, vcross, j, p0, k0, npan)
+            else:
+                _other_row(s, pt, aic, vcross, j, p0, k0, npan)
         for l in range(LANES):
             v = c.vel[l, vj]
             rhs[j, l] = v[0] * pt[N0 + l] + v[1] * pt[N1 + l] + v[2] * pt[N2 + l]

@@ -26,10 +26,12 @@ import numba as nb
 import numpy as np
 
 from .across_rows import (LANES, _STRIDE, X1X, X1Y, X1Z, X3X, X3Y, X3Z, CDX, CDY, CDZ, BDX, BDY, BDZ, TX, TY, TZ, I1,
-                          LCX, LCY, LCZ, BX, BY, BZ, PX, PY, PZ, N0, N1, N2, RW, _U_STRIDE, _core_radius,
-                          _other_llines, _fix_llines, _other_bounds, _fix_bounds)
+                          LCX, LCY, LCZ, BX, BY, BZ, PX, PY, PZ, N0, N1, N2, RW, _U_STRIDE)
+from .across import other_vehicles_rows
 from .aic import lu_solve_lanes
+from .benefit import _add_kutta_joukowski, _wind_axis_drag
 from .biot_savart import _TINY_H, FOUR_PI, sheet_on
+from .lanes import vehicle_knot_ranges
 
 __all__ = ["induced_drags_chunk"]
 
@@ -233,30 +235,6 @@ def _alone_circulations(lat, n_alone, keep, ga):
 
 
 @_jit
-def _kutta_joukowski(f, l, v, g, vel, o, ex, ey, ez, lx, ly, lz):
-    """:func:`formation_env.wake.benefit._add_kutta_joukowski` into ``f[l, v]`` (LANES, V, 3): ``g`` = rho Gamma,
-    ``vel`` the vehicle's velocity (3,), ``o`` the own horseshoes' velocity (3,), e the others'."""
-    vx = -vel[0] + o[0] + ex
-    vy = -vel[1] + o[1] + ey
-    vz = -vel[2] + o[2] + ez
-    f[l, v, 0] += g * (vy * lz - vz * ly)
-    f[l, v, 1] += g * (vz * lx - vx * lz)
-    f[l, v, 2] += g * (vx * ly - vy * lx)
-
-
-@_jit
-def _wind_axis_drag(rot, f, alpha, beta):
-    """:func:`formation_env.wake.benefit._wind_axis_drag`'s operations: minus the body force along the air-relative
-    direction (N)."""
-    ca, sa = np.cos(alpha), np.sin(alpha)
-    cb, sb = np.cos(beta), np.sin(beta)
-    fb0 = rot[0, 0] * f[0] + rot[0, 1] * f[1] + rot[0, 2] * f[2]
-    fb1 = rot[1, 0] * f[0] + rot[1, 1] * f[1] + rot[1, 2] * f[2]
-    fb2 = rot[2, 0] * f[0] + rot[2, 1] * f[1] + rot[2, 2] * f[2]
-    return -(fb0 * (ca * cb) + fb1 * sb + fb2 * (sa * cb))
-
-
-@_jit
 def induced_drags_chunk(wake, n_alone, c, speed, alpha, beta, gamma, keep, air_density, out_formation, out_alone):
     """Induced drag (N, wind axes) of each of the V vehicles of LANES formations in formation (``out_formation``
     (LANES, V)) and alone at the same pose and air data (``out_alone``): per lane, bit for bit
@@ -274,8 +252,7 @@ def induced_drags_chunk(wake, n_alone, c, speed, alpha, beta, gamma, keep, air_d
     n_panels = pv.shape[0]
     n_knots = kv.shape[0]
     nv = c.rot.shape[1]
-    cutoff, overlap_core = lat.cutoff_m, lat.overlap_core_m
-    ro2 = overlap_core * overlap_core if overlap_core > 0.0 else np.inf
+    cutoff = lat.cutoff_m
     sheet_law = sheet_on(wake.sheet)
     gf = np.empty((n_panels, LANES))
     for l in range(LANES):
@@ -283,11 +260,7 @@ def induced_drags_chunk(wake, n_alone, c, speed, alpha, beta, gamma, keep, air_d
             gf[j, l] = gamma[l, j]
     ga = np.empty((n_panels, LANES))
     _alone_circulations(lat, n_alone, keep, ga)
-    vk0 = np.full(nv, n_knots)
-    vk1 = np.zeros(nv, np.int64)
-    for k in range(n_knots):
-        vk0[kv[k]] = min(vk0[kv[k]], k)
-        vk1[kv[k]] = max(vk1[kv[k]], k + 1)
+    vk0, vk1 = vehicle_knot_ranges(kv, nv)
     f = np.zeros((LANES, nv, 3))  # summed Kutta-Joukowski force per vehicle, NED: in formation
     fa = np.zeros((LANES, nv, 3))  # and alone
     seg = np.empty((3, LANES))
@@ -312,29 +285,15 @@ def induced_drags_chunk(wake, n_alone, c, speed, alpha, beta, gamma, keep, air_d
         if b - 1 > a:
             _own_bounds(s, pt, a, b - 1, cutoff)
         _own_pair_sums(s, v, gf, ga, lat, own)
-        for srf in range(ksk.shape[0] - 1):
-            src = kv[ksk[srf]]
-            if src != v:
-                _core_radius(s, ksk[srf], ksk[srf + 1], c, srf, src, lat, speed, 0, LANES)
-        _other_llines(s, pt, 0, a, cutoff, ro2, sheet_law)
-        _other_llines(s, pt, b, n_knots, cutoff, ro2, sheet_law)
-        _fix_llines(s, 0, a, c, cutoff, overlap_core, wake.sheet)
-        _fix_llines(s, b, n_knots, c, cutoff, overlap_core, wake.sheet)
-        if a > 1:
-            _other_bounds(s, pt, 0, a - 1, ro2)
-        if n_knots - b > 1:
-            _other_bounds(s, pt, b, n_knots - 1, ro2)
-        for srf in range(ksk.shape[0] - 1):
-            k0 = ksk[srf]
-            if kv[k0] != v:
-                _fix_bounds(s, k0, ksk[srf + 1] - 1, c, cutoff, overlap_core)
+        other_vehicles_rows(lat, wake.sheet, speed, 0, LANES, c, v, a, b)
         _other_sums(s, v, gf, lat, ext)
         for l in range(LANES):
-            vel = c.vel[l, v]
-            _kutta_joukowski(f, l, v, air_density * gf[j, l], vel, own[0:3, l], ext[0, l], ext[1, l], ext[2, l],
-                             seg[0, l], seg[1, l], seg[2, l])
-            _kutta_joukowski(fa, l, v, air_density * ga[j, l], vel, own[3:6, l], 0.0, 0.0, 0.0, seg[0, l], seg[1, l],
-                             seg[2, l])
+            w0, w1, w2 = c.vel[l, v, 0], c.vel[l, v, 1], c.vel[l, v, 2]
+            lx, ly, lz = seg[0, l], seg[1, l], seg[2, l]
+            _add_kutta_joukowski(f[l], v, air_density * gf[j, l], w0, w1, w2, own[0, l], own[1, l], own[2, l],
+                                 ext[0, l], ext[1, l], ext[2, l], lx, ly, lz)
+            _add_kutta_joukowski(fa[l], v, air_density * ga[j, l], w0, w1, w2, own[3, l], own[4, l], own[5, l], 0.0,
+                                 0.0, 0.0, lx, ly, lz)
     for l in range(LANES):
         for v in range(nv):
             out_formation[l, v] = _wind_axis_drag(c.rot[l, v], f[l, v], alpha[l, v], beta[l, v])
