@@ -38,7 +38,8 @@ from .field import field_velocity
 from .posing import bound_length, branch_directions, place_lattice, to_ned
 from .structs import LatticeArrays, PosedLattice
 
-__all__ = ["LANES", "MAX_PANELS", "N_ROWS", "chunk_pays", "ChunkScratch", "chunk_scratch", "solve_chunk_lanes",
+__all__ = ["LANES", "MAX_PANELS", "N_ROWS", "chunk_pays", "ChunkScratch", "chunk_scratch", "other_vehicles_rows",
+           "solve_chunk_lanes",
            "field_chunk", "evaluate_chunk", "lanes_apply", "evaluate_batch_lanes_serial",
            "evaluate_batch_lanes_parallel"]
 
