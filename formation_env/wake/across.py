@@ -44,6 +44,7 @@ __all__ = ["LANES", "MAX_PANELS", "N_ROWS", "chunk_pays", "ChunkScratch", "chunk
            "evaluate_batch_lanes_parallel"]
 
 _jit = nb.njit(cache=True, fastmath=False, error_model="numpy")
+_jit_inline = nb.njit(cache=True, fastmath=False, error_model="numpy", inline="always")
 
 class ChunkScratch(NamedTuple):
     """The working arrays of one chunk of up to LANES formations of a lattice of V vehicles, K knots, S surfaces and
@@ -186,11 +187,14 @@ def _field_from_solve(pv, g, vcross, b0, nl, vpts_out):
             vpts_out[b0 + l, j, 2] = wz[l]
 
 
-@_jit
+@_jit_inline
 def other_vehicles_rows(lat, sheet, airspeed, b0, nl, c, vj, a, b):
     """The knots of every vehicle but vj (its knots a..b-1) seen from the point in the head rows of the chunk
-    scratch ``c``, every lane: their core radius, L-line and bound branch rows by the field law (fast form, the
-    flagged lanes by the scalar laws); ``airspeed`` (B, V) the formations' (lane l: formation b0 + min(l, nl - 1))."""
+    scratch ``c``, every lane: their core radius and L-line rows by the field law (fast form, the flagged lanes by
+    the scalar laws) and their bound branch rows in the fast form (a surface's flagged bound lanes are the caller's:
+    :func:`~formation_env.wake.across_rows._fix_bounds`, right before the rows read them); ``airspeed`` (B, V) the
+    formations' (lane l: formation b0 + min(l, nl - 1)). Inlined at numba IR level: a call of its own in the solve's
+    loop over the control points measured 8 % slower."""
     s, pt = c.s, c.p
     kv, ksk = lat.knot_vehicle, lat.surface_knot_start
     n_knots = kv.shape[0]
@@ -209,9 +213,6 @@ def other_vehicles_rows(lat, sheet, airspeed, b0, nl, c, vj, a, b):
         _other_bounds(s, pt, 0, a - 1, ro2)
     if n_knots - b > 1:
         _other_bounds(s, pt, b, n_knots - 1, ro2)
-    for srf in range(ksk.shape[0] - 1):
-        if kv[ksk[srf]] != vj:
-            _fix_bounds(s, ksk[srf], ksk[srf + 1] - 1, c, cutoff, overlap_core)
 
 
 @_jit
@@ -247,6 +248,7 @@ def solve_chunk_lanes(lat, sheet, pos, euler, airspeed, alpha, beta, b0, nl, c, 
             if kv[k0] == vj:
                 _own_row(s, aic, lat.aic_static, j, p0, k0, npan)
             else:
+                _fix_bounds(s, k0, k0 + npan, c, lat.cutoff_m, lat.overlap_core_m)
                 _other_row(s, pt, aic, vcross, j, p0, k0, npan)
         for l in range(LANES):
             v = c.vel[l, vj]

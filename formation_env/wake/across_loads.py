@@ -26,7 +26,7 @@ import numba as nb
 import numpy as np
 
 from .across_rows import (LANES, _STRIDE, X1X, X1Y, X1Z, X3X, X3Y, X3Z, CDX, CDY, CDZ, BDX, BDY, BDZ, TX, TY, TZ, I1,
-                          LCX, LCY, LCZ, BX, BY, BZ, PX, PY, PZ, N0, N1, N2, RW, _U_STRIDE)
+                          LCX, LCY, LCZ, BX, BY, BZ, PX, PY, PZ, N0, N1, N2, RW, _U_STRIDE, _fix_bounds)
 from .across import other_vehicles_rows
 from .aic import lu_solve_lanes
 from .benefit import _add_kutta_joukowski, _wind_axis_drag
@@ -286,6 +286,9 @@ def induced_drags_chunk(wake, n_alone, c, speed, alpha, beta, gamma, keep, air_d
             _own_bounds(s, pt, a, b - 1, cutoff)
         _own_pair_sums(s, v, gf, ga, lat, own)
         other_vehicles_rows(lat, wake.sheet, speed, 0, LANES, c, v, a, b)
+        for srf in range(ksk.shape[0] - 1):
+            if kv[ksk[srf]] != v:
+                _fix_bounds(s, ksk[srf], ksk[srf + 1] - 1, c, lat.cutoff_m, lat.overlap_core_m)
         _other_sums(s, v, gf, lat, ext)
         for l in range(LANES):
             w0, w1, w2 = c.vel[l, v, 0], c.vel[l, v, 1], c.vel[l, v, 2]
