@@ -254,6 +254,10 @@ def induced_drags_chunk(wake, n_alone, c, speed, alpha, beta, gamma, keep, air_d
     nv = c.rot.shape[1]
     cutoff = lat.cutoff_m
     sheet_law = sheet_on(wake.sheet)
+    for v in range(nv):
+        if lat.vehicle_panel_start[v + 1] - lat.vehicle_panel_start[v] != n_alone:
+            raise ValueError("induced_drags_chunk: n_alone differs from a vehicle's panel count (every vehicle must "
+                             "be of the make-up of the lone lattice)")
     gf = np.empty((n_panels, LANES))
     for l in range(LANES):
         for j in range(n_panels):

@@ -102,3 +102,15 @@ def test_a_changed_circulation_changes_the_chunks_drags():
     assert not np.array_equal(moved[0][7], base[0][7])
     assert np.array_equal(moved[1], base[1])
     assert np.array_equal(np.delete(moved[0], 7, 0), np.delete(base[0], 7, 0))
+
+
+def test_a_lone_lattice_of_another_make_up_is_refused():
+    """Every vehicle must have the lone lattice's panel count (as induced_drags_one demands)."""
+    w, _ = _wakes(2, False, False, True)
+    lat = w.lattice
+    n = w.n_panels
+    c = chunk_scratch(2, lat.knot_x1_b.shape[0], lat.surface_origin_b.shape[0], n, False)
+    z = np.zeros((LANES, 2))
+    with pytest.raises(ValueError, match="n_alone"):
+        induced_drags_chunk(w, n // 2 + 1, c, z + 25.0, z, z, np.zeros((LANES, n)), np.zeros((LANES, n, n + 1)), 1.225,
+                            z.copy(), z.copy())
